@@ -1,0 +1,497 @@
+//! A bushing: one backbone and a set of dissipative effects, composed at
+//! compile time.
+//!
+//! The force is split into branches (seed 000 eq 1.9):
+//! `F = g^0 F^∞(x) + Σ_effects F^e`, with the long-term fraction
+//! `g^0 = 1 - Σ g^i` over every cell of every effect. The backbone is
+//! evaluated once per step; every effect receives the same [`Drive`].
+//!
+//! Effects compose as tuples `(A, B, ...)`; `()` is a bushing with no
+//! dissipation and `Option<E>` an effect chosen at run time. An effect that is
+//! not in the type costs no instruction and no byte.
+
+use crate::backbone::Backbone;
+use crate::error::{Faults, ParamError};
+use crate::real::Real;
+
+/// What every effect sees in a step: the new displacement and the backbone
+/// evaluated there, with the increments since the last accepted step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Drive<T> {
+    /// Displacement x_n.
+    pub x: T,
+    /// Increment x_n - x_{n-1}.
+    pub dx: T,
+    /// High-frequency backbone force F^∞(x_n).
+    pub f_inf: T,
+    /// Increment F^∞(x_n) - F^∞(x_{n-1}).
+    pub df_inf: T,
+    /// Backbone tangent K^∞(x_n) > 0.
+    pub k_inf: T,
+}
+
+/// The result of one effect over one step.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct EffectOutput<T> {
+    /// Force carried by the effect's branches at the end of the step.
+    pub force: T,
+    /// Algorithmic tangent dF_n/dx_n of that force, the state at the start
+    /// of the step held fixed.
+    pub tangent: T,
+    /// Energy dissipated by the effect during the step (>= 0).
+    pub dissipated: T,
+}
+
+impl<T: Real> EffectOutput<T> {
+    /// All zero.
+    pub const fn zero() -> Self {
+        Self {
+            force: T::ZERO,
+            tangent: T::ZERO,
+            dissipated: T::ZERO,
+        }
+    }
+
+    fn plus(self, o: Self) -> Self {
+        Self {
+            force: self.force + o.force,
+            tangent: self.tangent + o.tangent,
+            dissipated: self.dissipated + o.dissipated,
+        }
+    }
+}
+
+/// A dissipative effect: parameters, validated and immutable, apart from a
+/// plain-data state.
+pub trait Effect<T: Real> {
+    /// Internal state.
+    type State: Clone + core::fmt::Debug + PartialEq;
+    /// Per-branch outputs of one step (one [`EffectOutput`] for a single
+    /// effect, a tuple of them for a tuple of effects).
+    type Report: Copy + core::fmt::Debug;
+
+    /// Sum of the load fractions g^i this effect takes from F^∞.
+    fn fraction(&self) -> f64;
+    /// Time step the effect was built for, if it depends on one.
+    fn dt(&self) -> Option<f64>;
+    /// Folds this effect's time step (and its parts') into `dt`, failing
+    /// when two parts were built for different steps.
+    fn check_dt(&self, dt: Option<f64>) -> Result<Option<f64>, ParamError> {
+        same_dt(dt, self.dt())
+    }
+    /// The relaxed state (no force in any branch).
+    fn rest(&self) -> Self::State;
+    /// Advances the state by one step.
+    fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> Self::Report;
+    /// Sum of the branch outputs of a report.
+    fn total(report: &Self::Report) -> EffectOutput<T>;
+}
+
+impl<T: Real> Effect<T> for () {
+    type State = ();
+    type Report = ();
+    fn fraction(&self) -> f64 {
+        0.0
+    }
+    fn dt(&self) -> Option<f64> {
+        None
+    }
+    fn rest(&self) {}
+    #[inline(always)]
+    fn step(&self, _: &mut (), _: &Drive<T>) {}
+    #[inline(always)]
+    fn total(_: &()) -> EffectOutput<T> {
+        EffectOutput::zero()
+    }
+}
+
+/// An effect present or not at run time (host-side composition). `None`
+/// costs one branch per step and no state.
+impl<T: Real, E: Effect<T>> Effect<T> for Option<E> {
+    type State = Option<E::State>;
+    type Report = Option<E::Report>;
+    fn fraction(&self) -> f64 {
+        self.as_ref().map_or(0.0, E::fraction)
+    }
+    fn dt(&self) -> Option<f64> {
+        self.as_ref().and_then(E::dt)
+    }
+    fn check_dt(&self, dt: Option<f64>) -> Result<Option<f64>, ParamError> {
+        self.as_ref().map_or(Ok(dt), |e| e.check_dt(dt))
+    }
+    fn rest(&self) -> Self::State {
+        self.as_ref().map(E::rest)
+    }
+    #[inline(always)]
+    fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> Self::Report {
+        match (self, state) {
+            (Some(e), Some(s)) => Some(e.step(s, drive)),
+            _ => None,
+        }
+    }
+    #[inline]
+    fn total(report: &Self::Report) -> EffectOutput<T> {
+        report.as_ref().map_or(EffectOutput::zero(), E::total)
+    }
+}
+
+fn same_dt(a: Option<f64>, b: Option<f64>) -> Result<Option<f64>, ParamError> {
+    match (a, b) {
+        (Some(x), Some(y)) if x != y => Err(ParamError::TimeStepMismatch { first: x, other: y }),
+        (Some(x), _) | (None, Some(x)) => Ok(Some(x)),
+        (None, None) => Ok(None),
+    }
+}
+
+macro_rules! tuple_effect {
+    ($($name:ident $idx:tt),+) => {
+        impl<T: Real, $($name: Effect<T>),+> Effect<T> for ($($name,)+) {
+            type State = ($($name::State,)+);
+            type Report = ($($name::Report,)+);
+            fn fraction(&self) -> f64 {
+                0.0 $(+ self.$idx.fraction())+
+            }
+            fn dt(&self) -> Option<f64> {
+                None $(.or(self.$idx.dt()))+
+            }
+            fn check_dt(&self, mut dt: Option<f64>) -> Result<Option<f64>, ParamError> {
+                $( dt = self.$idx.check_dt(dt)?; )+
+                Ok(dt)
+            }
+            fn rest(&self) -> Self::State {
+                ($(self.$idx.rest(),)+)
+            }
+            #[inline(always)]
+            fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> Self::Report {
+                ($(self.$idx.step(&mut state.$idx, drive),)+)
+            }
+            #[inline(always)]
+            fn total(report: &Self::Report) -> EffectOutput<T> {
+                EffectOutput::zero() $(.plus($name::total(&report.$idx)))+
+            }
+        }
+    };
+}
+
+tuple_effect!(A 0);
+tuple_effect!(A 0, B 1);
+tuple_effect!(A 0, B 1, C 2);
+tuple_effect!(A 0, B 1, C 2, D 3);
+tuple_effect!(A 0, B 1, C 2, D 3, E 4);
+tuple_effect!(A 0, B 1, C 2, D 3, E 4, F 5);
+
+/// State of a [`Bushing`]: the last accepted input, backbone force and
+/// output, the effects' states, and the fault flags.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BushingState<T, S> {
+    x: T,
+    f_inf: T,
+    force: T,
+    tangent: T,
+    effects: S,
+    faults: Faults,
+    rejected: u32,
+}
+
+impl<T: Real, S> BushingState<T, S> {
+    /// Last accepted displacement.
+    pub fn x(&self) -> T {
+        self.x
+    }
+    /// Force after the last accepted step.
+    pub fn force(&self) -> T {
+        self.force
+    }
+    /// Effects' states.
+    pub fn effects(&self) -> &S {
+        &self.effects
+    }
+    /// Fault flags raised since the last [`BushingState::clear_faults`].
+    pub fn faults(&self) -> Faults {
+        self.faults
+    }
+    /// Number of refused steps since the last clear (saturating).
+    pub fn rejected(&self) -> u32 {
+        self.rejected
+    }
+    /// Clears the fault flags and the refused-step count.
+    pub fn clear_faults(&mut self) {
+        self.faults = Faults::NONE;
+        self.rejected = 0;
+    }
+}
+
+/// The result of one bushing step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Output<T, R> {
+    /// Total force F_n.
+    pub force: T,
+    /// Algorithmic tangent dF_n/dx_n.
+    pub tangent: T,
+    /// Energy dissipated in the step, all branches.
+    pub dissipated: T,
+    /// Force of the long-term elastic branch g^0 F^∞(x_n).
+    pub elastic: T,
+    /// Per-effect outputs; `None` when the step was refused.
+    pub effects: Option<R>,
+}
+
+/// A backbone plus a set of effects (see the module docs).
+///
+/// `step` never panics. A non-finite input, or one where the backbone force
+/// or tangent exceeds [`Real::GUARD`], is refused: the state is kept, the
+/// last force and tangent are returned with zero dissipation, and a fault
+/// flag is raised in the state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bushing<T, B, E> {
+    backbone: B,
+    effects: E,
+    g0: T,
+    g0_f64: f64,
+}
+
+impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
+    /// Joins a backbone and effects; refuses fractions above one and effects
+    /// built for different time steps.
+    pub fn new(backbone: B, effects: E) -> Result<Self, ParamError> {
+        effects.check_dt(None)?;
+        let sum = effects.fraction();
+        // One part in 1e12 of slack for fractions entered as decimals.
+        if sum.is_nan() || sum > 1.0 + 1e-12 {
+            return Err(ParamError::FractionsAboveOne { sum });
+        }
+        let g0 = (1.0 - sum).max(0.0);
+        Ok(Self {
+            backbone,
+            effects,
+            g0: T::from_f64(g0),
+            g0_f64: g0,
+        })
+    }
+
+    /// Long-term fraction g^0 = 1 - Σ g^i.
+    pub fn g0(&self) -> f64 {
+        self.g0_f64
+    }
+
+    /// The backbone.
+    pub fn backbone(&self) -> &B {
+        &self.backbone
+    }
+
+    /// The effects.
+    pub fn effects(&self) -> &E {
+        &self.effects
+    }
+
+    /// A relaxed state at displacement `x0`: every dissipative branch at
+    /// zero force, so starting away from zero creates no spurious step.
+    /// A non-finite `x0` is replaced by 0 and flagged.
+    pub fn state_at(&self, x0: T) -> BushingState<T, E::State> {
+        let mut faults = Faults::NONE;
+        let mut x = x0;
+        let (mut f, mut k) = self.backbone.eval(x);
+        if !x.is_finite() || !within_guard(f, k) {
+            faults.raise(if x.is_finite() {
+                Faults::OUT_OF_RANGE
+            } else {
+                Faults::NON_FINITE_INPUT
+            });
+            x = T::ZERO;
+            (f, k) = self.backbone.eval(x);
+        }
+        BushingState {
+            x,
+            f_inf: f,
+            force: self.g0 * f,
+            tangent: self.g0 * k,
+            effects: self.effects.rest(),
+            faults,
+            rejected: 0,
+        }
+    }
+
+    /// Advances `state` to displacement `x` and returns the output.
+    /// Always inlined: a control loop calls it once per period, and inlining
+    /// lets the compiler drop the outputs the caller does not read (the
+    /// dissipated energy, with its division).
+    #[inline(always)]
+    pub fn step(&self, state: &mut BushingState<T, E::State>, x: T) -> Output<T, E::Report> {
+        if !x.is_finite() {
+            return refuse(state, self.g0, Faults::NON_FINITE_INPUT);
+        }
+        let (f_inf, k_inf) = self.backbone.eval(x);
+        if !within_guard(f_inf, k_inf) {
+            return refuse(state, self.g0, Faults::OUT_OF_RANGE);
+        }
+        let drive = Drive {
+            x,
+            dx: x - state.x,
+            f_inf,
+            df_inf: f_inf - state.f_inf,
+            k_inf,
+        };
+        let report = self.effects.step(&mut state.effects, &drive);
+        let total = E::total(&report);
+        let elastic = self.g0 * f_inf;
+        let force = elastic + total.force;
+        let tangent = self.g0 * k_inf + total.tangent;
+        state.x = x;
+        state.f_inf = f_inf;
+        state.force = force;
+        state.tangent = tangent;
+        Output {
+            force,
+            tangent,
+            dissipated: total.dissipated,
+            elastic,
+            effects: Some(report),
+        }
+    }
+
+    /// The step `step` would take, without changing `state`: returns the
+    /// output and the state it would commit (for implicit solvers that
+    /// iterate on x and commit only the converged state).
+    pub fn trial(
+        &self,
+        state: &BushingState<T, E::State>,
+        x: T,
+    ) -> (Output<T, E::Report>, BushingState<T, E::State>) {
+        let mut next = state.clone();
+        let out = self.step(&mut next, x);
+        (out, next)
+    }
+}
+
+#[inline(always)]
+fn within_guard<T: Real>(f: T, k: T) -> bool {
+    f.abs() <= T::GUARD && k.abs() <= T::GUARD
+}
+
+#[cold]
+fn refuse<T: Real, S, R>(state: &mut BushingState<T, S>, g0: T, why: Faults) -> Output<T, R> {
+    state.faults.raise(why);
+    state.rejected = state.rejected.saturating_add(1);
+    Output {
+        force: state.force,
+        tangent: state.tangent,
+        dissipated: T::ZERO,
+        elastic: g0 * state.f_inf,
+        effects: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::backbone::Polynomial;
+    use crate::maxwell::{MaxwellBank, MaxwellForm, MaxwellSpec};
+
+    type Bank = MaxwellBank<f64, 2>;
+
+    fn bank(g: f64, dt: f64) -> Bank {
+        let specs = [MaxwellSpec::new(2.0, g), MaxwellSpec::new(200.0, g)];
+        Bank::new(MaxwellForm::RateExactRamp, &specs, dt).unwrap()
+    }
+
+    fn cubic() -> Polynomial<f64, 4> {
+        Polynomial::new(&[1.0, 100.0, 0.0, 2.0], (-5.0, 5.0)).unwrap()
+    }
+
+    #[test]
+    fn trial_is_pure_and_equals_step() {
+        let b = Bushing::new(cubic(), (bank(0.2, 1e-3),)).unwrap();
+        let mut s = b.state_at(0.0);
+        for n in 0..50 {
+            b.step(&mut s, 0.01 * n as f64);
+        }
+        let before = s.clone();
+        let (out, next) = b.trial(&s, 0.7);
+        assert_eq!(s, before);
+        let stepped = b.step(&mut s, 0.7);
+        assert_eq!(out, stepped);
+        assert_eq!(next, s);
+    }
+
+    #[test]
+    fn a_relaxed_start_away_from_zero_has_no_spurious_step() {
+        let b = Bushing::new(cubic(), (bank(0.2, 1e-3),)).unwrap();
+        let mut s = b.state_at(2.0);
+        let (f_inf, k_inf) = cubic().eval(2.0);
+        assert_eq!(s.force(), b.g0() * f_inf);
+        let out = b.step(&mut s, 2.0);
+        assert_eq!(out.force, b.g0() * f_inf);
+        assert_eq!(out.dissipated, 0.0);
+        assert!(out.tangent > b.g0() * k_inf);
+    }
+
+    #[test]
+    fn fractions_and_time_steps_are_checked_across_effects() {
+        assert_eq!(
+            Bushing::new(cubic(), (bank(0.3, 1e-3), bank(0.25, 1e-3))).unwrap_err(),
+            ParamError::FractionsAboveOne { sum: 1.1 }
+        );
+        assert_eq!(
+            Bushing::new(cubic(), (bank(0.1, 1e-3), bank(0.1, 2e-3))).unwrap_err(),
+            ParamError::TimeStepMismatch {
+                first: 1e-3,
+                other: 2e-3
+            }
+        );
+        let b = Bushing::new(cubic(), (bank(0.1, 1e-3), None::<Bank>, bank(0.2, 1e-3))).unwrap();
+        assert!((b.g0() - 0.4).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_tuple_sums_its_effects_and_none_adds_nothing() {
+        let single = Bushing::new(cubic(), (bank(0.2, 1e-3),)).unwrap();
+        let with_none = Bushing::new(cubic(), (bank(0.2, 1e-3), None::<Bank>)).unwrap();
+        let pair = Bushing::new(cubic(), (bank(0.1, 1e-3), bank(0.1, 1e-3))).unwrap();
+        let (mut s1, mut s2, mut s3) = (
+            single.state_at(0.0),
+            with_none.state_at(0.0),
+            pair.state_at(0.0),
+        );
+        for n in 0..300 {
+            let x = (0.05 * n as f64).sin();
+            let a = single.step(&mut s1, x);
+            let b = with_none.step(&mut s2, x);
+            let c = pair.step(&mut s3, x);
+            assert_eq!(a.force, b.force);
+            assert_eq!(b.effects.unwrap().1, None);
+            let (e0, e1) = c.effects.unwrap();
+            assert_eq!(e0, e1);
+            assert!((a.force - c.force).abs() <= 1e-12 * a.force.abs().max(1.0));
+            assert!((a.dissipated - c.dissipated).abs() <= 1e-12 * a.dissipated.max(1e-12));
+            assert_eq!(c.force, c.elastic + (e0.force + e1.force));
+        }
+    }
+
+    #[test]
+    fn refused_steps_keep_everything_and_count() {
+        let b = Bushing::new(cubic(), (bank(0.2, 1e-3),)).unwrap();
+        let mut s = b.state_at(0.0);
+        let last = b.step(&mut s, 0.5);
+        let kept = s.clone();
+        let out = b.step(&mut s, f64::NAN);
+        assert_eq!(
+            (out.force, out.tangent, out.dissipated),
+            (last.force, last.tangent, 0.0)
+        );
+        assert_eq!(out.elastic, last.elastic);
+        assert!(out.effects.is_none());
+        let out = b.step(&mut s, 1e200);
+        assert_eq!(out.force, last.force);
+        assert!(
+            s.faults().contains(Faults::NON_FINITE_INPUT)
+                && s.faults().contains(Faults::OUT_OF_RANGE)
+        );
+        assert_eq!(s.rejected(), 2);
+        s.clear_faults();
+        assert_eq!(s, kept);
+        // A non-finite starting point is replaced by zero and flagged.
+        let s = b.state_at(f64::INFINITY);
+        assert_eq!(s.x(), 0.0);
+        assert!(s.faults().contains(Faults::NON_FINITE_INPUT));
+    }
+}

@@ -1,0 +1,256 @@
+//! Typed construction errors and run-time fault flags.
+
+use core::fmt;
+
+/// Names one parameter, with its position when it belongs to a list
+/// (a cell of a bank, a knot of a spline, a coefficient of a polynomial).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Param {
+    /// Parameter name as written in the docs and in scene files.
+    pub name: &'static str,
+    /// Position in its list, if any.
+    pub index: Option<usize>,
+}
+
+impl Param {
+    /// A scalar parameter.
+    pub const fn scalar(name: &'static str) -> Self {
+        Self { name, index: None }
+    }
+    /// Entry `index` of a list parameter.
+    pub const fn item(name: &'static str, index: usize) -> Self {
+        Self {
+            name,
+            index: Some(index),
+        }
+    }
+}
+
+impl fmt::Display for Param {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.index {
+            Some(i) => write!(f, "{}[{}]", self.name, i),
+            None => f.write_str(self.name),
+        }
+    }
+}
+
+/// Why a set of parameters was refused. One variant per broken rule; each
+/// names the parameter and the bound it breaks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ParamError {
+    /// The value is NaN or infinite.
+    NotFinite {
+        /// Offending parameter.
+        param: Param,
+    },
+    /// The value must be strictly positive.
+    NotPositive {
+        /// Offending parameter.
+        param: Param,
+        /// Value given.
+        value: f64,
+    },
+    /// The load fractions g^i of all dissipative branches add up to more
+    /// than one, which would leave a negative long-term gain g^0 (seed 000
+    /// §2.4.1: the fractions are relative to the high-frequency gain K^∞).
+    FractionsAboveOne {
+        /// Sum of the fractions.
+        sum: f64,
+    },
+    /// An explicit scheme (eqs 1.13, 1.16) was asked for a cell with
+    /// `omega * dt >= 1`, where its pole `1 - omega*dt` is no longer in (0, 1).
+    ExplicitUnstable {
+        /// Cell index in its bank.
+        cell: usize,
+        /// The product omega * dt of that cell.
+        omega_dt: f64,
+    },
+    /// Not enough points or coefficients.
+    TooFew {
+        /// Offending list.
+        param: Param,
+        /// Smallest accepted length.
+        min: usize,
+        /// Length given.
+        got: usize,
+    },
+    /// More points or coefficients than the fixed capacity.
+    TooMany {
+        /// Offending list.
+        param: Param,
+        /// Capacity of the type.
+        capacity: usize,
+        /// Length given.
+        got: usize,
+    },
+    /// Two lists that must have the same length do not.
+    LengthMismatch {
+        /// The second list.
+        param: Param,
+        /// Length of the first list.
+        expected: usize,
+        /// Length of the second.
+        got: usize,
+    },
+    /// A sequence must increase strictly; `param.index` is the first entry
+    /// that does not exceed its predecessor.
+    NotIncreasing {
+        /// Offending entry.
+        param: Param,
+    },
+    /// The backbone tangent is not positive everywhere on its range, so the
+    /// elastic potential would not be convex (seed 000 §2.3.1). `x` is a
+    /// point where positivity fails or cannot be proven.
+    TangentNotPositive {
+        /// Abscissa where the check failed.
+        x: f64,
+    },
+    /// A range with `lo >= hi`.
+    EmptyRange {
+        /// Lower end.
+        lo: f64,
+        /// Upper end.
+        hi: f64,
+    },
+    /// Effects built for different time steps were put in one bushing.
+    TimeStepMismatch {
+        /// Time step of the first effect.
+        first: f64,
+        /// A different time step found later.
+        other: f64,
+    },
+}
+
+impl fmt::Display for ParamError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::NotFinite { param } => write!(f, "{param} must be finite"),
+            Self::NotPositive { param, value } => {
+                write!(f, "{param} must be > 0 (got {value})")
+            }
+            Self::FractionsAboveOne { sum } => write!(
+                f,
+                "load fractions g add up to {sum}, above 1: the long-term gain g0 = 1 - sum(g) would be negative"
+            ),
+            Self::ExplicitUnstable { cell, omega_dt } => write!(
+                f,
+                "cell {cell}: omega*dt = {omega_dt} >= 1, outside the range of an explicit scheme; use an exponential form or a smaller dt"
+            ),
+            Self::TooFew { param, min, got } => {
+                write!(f, "{param}: at least {min} entries needed, got {got}")
+            }
+            Self::TooMany {
+                param,
+                capacity,
+                got,
+            } => write!(f, "{param}: capacity is {capacity} entries, got {got}"),
+            Self::LengthMismatch {
+                param,
+                expected,
+                got,
+            } => write!(f, "{param}: expected {expected} entries, got {got}"),
+            Self::NotIncreasing { param } => {
+                write!(f, "{param} must be larger than the entry before it")
+            }
+            Self::TangentNotPositive { x } => {
+                write!(f, "backbone tangent is not provably positive near x = {x}")
+            }
+            Self::EmptyRange { lo, hi } => write!(f, "range [{lo}, {hi}] is empty"),
+            Self::TimeStepMismatch { first, other } => write!(
+                f,
+                "effects built for different time steps: {first} s and {other} s"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ParamError {}
+
+/// Checks that `value` is finite and strictly positive.
+pub(crate) fn positive(param: Param, value: f64) -> Result<f64, ParamError> {
+    if !value.is_finite() {
+        Err(ParamError::NotFinite { param })
+    } else if value > 0.0 {
+        Ok(value)
+    } else {
+        Err(ParamError::NotPositive { param, value })
+    }
+}
+
+/// Checks that `value` is finite.
+pub(crate) fn finite(param: Param, value: f64) -> Result<f64, ParamError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(ParamError::NotFinite { param })
+    }
+}
+
+/// Sticky fault flags of a running model. A step that raises one keeps the
+/// last finite state; the caller reads and clears the flags when it likes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Faults(u8);
+
+impl Faults {
+    /// No fault.
+    pub const NONE: Self = Self(0);
+    /// An input was NaN or infinite.
+    pub const NON_FINITE_INPUT: Self = Self(1);
+    /// The backbone force or tangent at the input exceeded [`crate::Real::GUARD`].
+    pub const OUT_OF_RANGE: Self = Self(2);
+
+    /// True if no flag is raised.
+    pub const fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+    /// True if every flag of `other` is raised.
+    pub const fn contains(self, other: Self) -> bool {
+        self.0 & other.0 == other.0
+    }
+    /// Raises the flags of `other`.
+    pub fn raise(&mut self, other: Self) {
+        self.0 |= other.0;
+    }
+    /// The raw bits (for logging).
+    pub const fn bits(self) -> u8 {
+        self.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn positive_rejects_each_bad_value_with_its_variant() {
+        let p = Param::item("omega", 3);
+        assert_eq!(positive(p, 2.0), Ok(2.0));
+        assert_eq!(
+            positive(p, 0.0),
+            Err(ParamError::NotPositive {
+                param: p,
+                value: 0.0
+            })
+        );
+        assert_eq!(
+            positive(p, f64::NAN),
+            Err(ParamError::NotFinite { param: p })
+        );
+        assert_eq!(
+            positive(p, f64::INFINITY),
+            Err(ParamError::NotFinite { param: p })
+        );
+        assert_eq!(finite(p, -1.0), Ok(-1.0));
+    }
+
+    #[test]
+    fn faults_are_sticky_bits() {
+        let mut f = Faults::NONE;
+        assert!(f.is_empty());
+        f.raise(Faults::OUT_OF_RANGE);
+        f.raise(Faults::NON_FINITE_INPUT);
+        assert!(f.contains(Faults::OUT_OF_RANGE) && f.contains(Faults::NON_FINITE_INPUT));
+        assert_eq!(f.bits(), 3);
+    }
+}

@@ -1,0 +1,64 @@
+//! # bushing: real-time models of rubber bushings and bolted joints
+//!
+//! Fixed-step, allocation-free, panic-free models for test-rig controller
+//! firmware, after the recursive schemes of R. Penas, *Models of dissipative
+//! bushings in multibody dynamics* (2021), "seed 000" in the project docs.
+//!
+//! A bushing force is a hyperelastic **backbone** F^∞(x) ([`backbone`]) plus
+//! dissipative **effects** that take fractions g^i of it: so far the
+//! generalised Maxwell cells of [`maxwell`] in all five discrete forms of the
+//! thesis. A [`Bushing`] joins them; effects compose as tuples at compile
+//! time, so an effect a firmware build does not name costs nothing.
+//!
+//! ## The contract
+//!
+//! - Parameters are validated at construction (`Result<_, ParamError>`, a
+//!   variant per broken rule) and immutable; every coefficient is computed
+//!   there in `f64` (exponentials with `expm1`) and stored in the working
+//!   type `T: Real` (`f32` or `f64`).
+//! - State is plain data apart from the parameters:
+//!   `params.step(&mut state, x) -> Output`, and the pure
+//!   `params.trial(&state, x) -> (Output, State)` beside it.
+//! - The output carries the force, the algorithmic tangent dF_n/dx_n and the
+//!   energy dissipated in the step, per effect.
+//! - A non-finite or out-of-range input never poisons the state: the step is
+//!   refused, the last force returned and a fault flag raised.
+//!
+//! ```
+//! use bushing::{Bushing, MaxwellBank, MaxwellForm, MaxwellSpec, Polynomial};
+//!
+//! let dt = 1e-3; // 1 kHz control loop
+//! let backbone = Polynomial::<f32, 4>::new(&[0.0, 200.0, 0.0, 8.0], (-5.0, 5.0))?; // N, mm
+//! let cells = [MaxwellSpec::hz(0.5, 0.1), MaxwellSpec::hz(5.0, 0.1), MaxwellSpec::hz(50.0, 0.1)];
+//! let bank = MaxwellBank::<f32, 3>::new(MaxwellForm::RateExactRamp, &cells, dt)?;
+//! let bushing = Bushing::new(backbone, (bank,))?;
+//! let mut state = bushing.state_at(0.0);
+//! let out = bushing.step(&mut state, 0.1);
+//! assert!(out.force > 0.0 && out.tangent > 0.0 && out.dissipated >= 0.0);
+//! # Ok::<(), bushing::ParamError>(())
+//! ```
+#![no_std]
+#![forbid(unsafe_code)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::indexing_slicing,
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic
+    )
+)]
+
+pub mod accumulator;
+pub mod backbone;
+pub mod bushing;
+pub mod error;
+pub mod maxwell;
+pub mod real;
+
+pub use accumulator::{Accumulator, Compensated, Plain};
+pub use backbone::{Backbone, MonotoneSpline, Polynomial};
+pub use bushing::{Bushing, BushingState, Drive, Effect, EffectOutput, Output};
+pub use error::{Faults, Param, ParamError};
+pub use maxwell::{MaxwellBank, MaxwellCell, MaxwellForm, MaxwellSpec};
+pub use real::Real;

@@ -1,0 +1,508 @@
+//! Generalised Maxwell cells in the five discrete forms of seed 000 §1.3.2.
+//!
+//! A Maxwell branch `i` has a corner angular frequency ω_i (rad/s; the pole is
+//! `-ω_i`, the corner in Hz `ω_i / 2π`) and a load fraction g_i of the
+//! high-frequency backbone. Its continuous laws are the load relaxation
+//! (eq 1.11) `Ḟ^i/ω_i + F^i = -g_i F^∞(x)` and the load-rate relaxation
+//! (eq 1.12) `Ḟ^i + ω_i F^i = g_i Ḟ^∞(x)`; the bushing force is
+//! `F = g^0 F^∞ + Σ branch forces` (eq 1.9) with the static limit
+//! `g^0 = 1 - Σ g_i`, and for a linear backbone `F^∞ = K^∞ x` the complex
+//! stiffness is eq 1.8, `K(iω) = K^∞ (g^0 + Σ g_i iω / (iω + ω_i))`.
+//!
+//! With `h = ω_i dt` every form is the one recurrence
+//!
+//! ```text
+//! F^i_n = F^i_{n-1} - d F^i_{n-1} + p ΔF^∞_n + q F^∞_n
+//! ```
+//!
+//! | form | eq | d | p | q |
+//! |---|---|---|---|---|
+//! | [`MaxwellForm::LoadExplicit`] | 1.13 | h | 0 | -h g |
+//! | [`MaxwellForm::LoadExponential`] | 1.15 | 1 - e^-h | h g e^(-h/2) / 2 | -h g e^(-h/2) |
+//! | [`MaxwellForm::RateExplicit`] | 1.16 | h | g | 0 |
+//! | [`MaxwellForm::RateMidpoint`] | 1.17 | 1 - e^-h | g e^(-h/2) | 0 |
+//! | [`MaxwellForm::RateExactRamp`] | 1.12 exact | 1 - e^-h | g (1 - e^-h)/h | 0 |
+//!
+//! The load forms carry the relaxation `F^i_LR = F^i - g_i F^∞` and report the
+//! branch force `F^i_LR + g_i F^∞`, so every form reports the same branch
+//! forces. `d = -expm1(-h)` is computed in `f64` and stored, so slow cells
+//! keep their decay rate (`1 - e^-h` formed in `f32` would lose it).
+//!
+//! - **States**: one accumulator per cell (one word, or two with
+//!   [`Compensated`](crate::Compensated)); the bushing keeps the shared
+//!   `F^∞_{n-1}`.
+//! - **Stability**: the exponential forms have the pole `e^-h`, stable for
+//!   every h > 0 (finite and bounded from h = 1e-7 to 1e4, tested). The
+//!   explicit forms have the pole `1 - h`, which is negative (oscillating)
+//!   from h = 1 and unstable from h = 2; they are refused at `h >= 1`
+//!   ([`ParamError::ExplicitUnstable`]).
+//! - **Accuracy**: the exponential load form (1.15) settles, under a
+//!   constant F^∞, on `-g (h/2)/sinh(h/2) F^∞` instead of `-g F^∞`: a
+//!   static-gain error of h²/24 per cell, which vanishes only as dt → 0.
+//!   The exact-ramp form is exact for a backbone force that
+//!   is linear in time over the step; the midpoint form (1.17) replaces
+//!   `(1 - e^-h)/h` by `e^(-h/2)`, −4 % at h = 1 and a vanishing gain
+//!   (lost loss modulus) for h ≫ 1; see `docs/maxwell-accuracy.md`.
+//! - **Cost**: rate forms 2 multiply-adds per cell, load forms 4; the
+//!   dissipated energy adds 3 per cell and one division per bank by K^∞
+//!   (removed by the compiler when the caller does not read it).
+
+use core::marker::PhantomData;
+
+use crate::accumulator::{Accumulator, Plain};
+use crate::bushing::{Drive, Effect, EffectOutput};
+use crate::error::{Param, ParamError, positive};
+use crate::real::Real;
+
+/// The discrete form of a Maxwell cell (see the module table).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MaxwellForm {
+    /// Load relaxation, explicit Euler (eq 1.13).
+    LoadExplicit,
+    /// Load relaxation, exponential with trapezoid (eq 1.15).
+    LoadExponential,
+    /// Load-rate relaxation, explicit (eq 1.16).
+    RateExplicit,
+    /// Load-rate relaxation, exponential midpoint (eq 1.17), the thesis's scheme.
+    RateMidpoint,
+    /// Load-rate relaxation, exponential integrator exact for a ramp input.
+    RateExactRamp,
+}
+
+impl MaxwellForm {
+    /// Every form, in the order of the thesis.
+    pub const ALL: [Self; 5] = [
+        Self::LoadExplicit,
+        Self::LoadExponential,
+        Self::RateExplicit,
+        Self::RateMidpoint,
+        Self::RateExactRamp,
+    ];
+
+    /// Name used in scene files and reports.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::LoadExplicit => "load-explicit",
+            Self::LoadExponential => "load-exponential",
+            Self::RateExplicit => "rate-explicit",
+            Self::RateMidpoint => "rate-midpoint",
+            Self::RateExactRamp => "rate-exact-ramp",
+        }
+    }
+
+    /// Parses a name written by [`MaxwellForm::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|f| f.name() == name)
+    }
+
+    /// Equation of seed 000 the form implements.
+    pub const fn equation(self) -> &'static str {
+        match self {
+            Self::LoadExplicit => "1.13",
+            Self::LoadExponential => "1.15",
+            Self::RateExplicit => "1.16",
+            Self::RateMidpoint => "1.17",
+            Self::RateExactRamp => "1.12 (exact ramp)",
+        }
+    }
+
+    /// True for the explicit forms, refused at ω·dt >= 1.
+    pub const fn is_explicit(self) -> bool {
+        matches!(self, Self::LoadExplicit | Self::RateExplicit)
+    }
+
+    /// True for the load (total force) forms, which carry the relaxation.
+    pub const fn is_load(self) -> bool {
+        matches!(self, Self::LoadExplicit | Self::LoadExponential)
+    }
+}
+
+/// Parameters of one Maxwell cell as a user gives them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MaxwellSpec {
+    /// Corner angular frequency ω_i in rad/s (pole at -ω_i).
+    pub omega: f64,
+    /// Load fraction g_i of the high-frequency backbone.
+    pub g: f64,
+}
+
+impl MaxwellSpec {
+    /// A cell with corner ω (rad/s) and fraction g.
+    pub const fn new(omega: f64, g: f64) -> Self {
+        Self { omega, g }
+    }
+    /// A cell with corner frequency `f` in Hz (ω = 2π f), as Table 3.1 of
+    /// seed 000 quotes them.
+    pub fn hz(f: f64, g: f64) -> Self {
+        Self::new(core::f64::consts::TAU * f, g)
+    }
+}
+
+/// Precomputed coefficients of one cell (see the module table).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct MaxwellCell<T> {
+    decay: T,
+    rate_gain: T,
+    level_gain: T,
+    g: T,
+    loss: T,
+    tangent: f64,
+}
+
+impl<T: Real> MaxwellCell<T> {
+    /// Coefficients of cell `index` of a bank in `form` at time step `dt`.
+    pub fn new(
+        form: MaxwellForm,
+        spec: MaxwellSpec,
+        dt: f64,
+        index: usize,
+    ) -> Result<Self, ParamError> {
+        let dt = positive(Param::scalar("dt"), dt)?;
+        let omega = positive(Param::item("omega", index), spec.omega)?;
+        let g = positive(Param::item("g", index), spec.g)?;
+        if g > 1.0 {
+            return Err(ParamError::FractionsAboveOne { sum: g });
+        }
+        let h = omega * dt;
+        if !h.is_finite() {
+            return Err(ParamError::NotFinite {
+                param: Param::item("omega", index),
+            });
+        }
+        if form.is_explicit() && h >= 1.0 {
+            return Err(ParamError::ExplicitUnstable {
+                cell: index,
+                omega_dt: h,
+            });
+        }
+        let one_minus_a = -libm::expm1(-h);
+        let mid = libm::exp(-0.5 * h);
+        let (decay, p, q) = match form {
+            MaxwellForm::LoadExplicit => (h, 0.0, -h * g),
+            MaxwellForm::LoadExponential => (one_minus_a, 0.5 * h * g * mid, -h * g * mid),
+            MaxwellForm::RateExplicit => (h, g, 0.0),
+            MaxwellForm::RateMidpoint => (one_minus_a, g * mid, 0.0),
+            MaxwellForm::RateExactRamp => (one_minus_a, g * one_minus_a / h, 0.0),
+        };
+        // dF_branch/dF^inf_n: p + q, plus g for the load forms.
+        let tangent = p + q + if form.is_load() { g } else { 0.0 };
+        Ok(Self {
+            decay: T::from_f64(decay),
+            rate_gain: T::from_f64(p),
+            level_gain: T::from_f64(q),
+            g: T::from_f64(g),
+            loss: T::from_f64(h / g),
+            tangent,
+        })
+    }
+
+    /// Share of dF/dF^∞ this cell adds to the tangent.
+    pub fn tangent_share(&self) -> f64 {
+        self.tangent
+    }
+}
+
+/// Sum of the cells' tangent shares, in the working type.
+pub fn tangent_gain<T: Real>(cells: &[MaxwellCell<T>]) -> T {
+    T::from_f64(cells.iter().map(MaxwellCell::tangent_share).sum())
+}
+
+/// Advances a slice of cells by one step: the one implementation of every
+/// form, used by [`MaxwellBank`] and by run-time sized banks.
+/// `cells` and `states` are walked together (extra entries of the longer
+/// one are ignored); `tangent_gain` is [`tangent_gain`] of the cells.
+#[inline(always)]
+pub fn step_cells<T: Real, A: Accumulator<T>>(
+    form: MaxwellForm,
+    cells: &[MaxwellCell<T>],
+    states: &mut [A],
+    tangent_gain: T,
+    drive: &Drive<T>,
+) -> EffectOutput<T> {
+    let df = drive.df_inf;
+    let mut force = T::ZERO;
+    let mut squares = T::ZERO;
+    if form.is_load() {
+        let f_new = drive.f_inf;
+        let f_old = f_new - df;
+        for (c, s) in cells.iter().zip(states.iter_mut()) {
+            let old = s.value();
+            s.add(c.rate_gain * df + c.level_gain * f_new - c.decay * old);
+            let branch_old = old + c.g * f_old;
+            let branch_new = s.value() + c.g * f_new;
+            force += branch_new;
+            squares += c.loss * (branch_old * branch_old + branch_new * branch_new);
+        }
+    } else {
+        for (c, s) in cells.iter().zip(states.iter_mut()) {
+            let old = s.value();
+            s.add(c.rate_gain * df - c.decay * old);
+            let new = s.value();
+            force += new;
+            squares += c.loss * (old * old + new * new);
+        }
+    }
+    EffectOutput {
+        force,
+        tangent: tangent_gain * drive.k_inf,
+        // Σ ω_i dt F_i² / (g_i K^∞), trapezoid over the step.
+        dissipated: T::HALF * squares / drive.k_inf,
+    }
+}
+
+/// A bank of `N` Maxwell cells in one form, coupled to the backbone by
+/// force rate (eq 1.12; see the module docs for equations, limits and cost).
+///
+/// `A` selects the state storage: [`Plain`] (default) or
+/// [`Compensated`](crate::Compensated) for slow cells in `f32`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaxwellBank<T, const N: usize, A = Plain<T>> {
+    form: MaxwellForm,
+    cells: [MaxwellCell<T>; N],
+    tangent_gain: T,
+    fraction: f64,
+    dt: f64,
+    acc: PhantomData<A>,
+}
+
+impl<T: Real, const N: usize, A: Accumulator<T>> MaxwellBank<T, N, A> {
+    /// Builds the bank for time step `dt` (seconds).
+    pub fn new(form: MaxwellForm, specs: &[MaxwellSpec; N], dt: f64) -> Result<Self, ParamError> {
+        let mut cells = [MaxwellCell::default(); N];
+        let mut fraction = 0.0;
+        for (i, (cell, spec)) in cells.iter_mut().zip(specs).enumerate() {
+            *cell = MaxwellCell::new(form, *spec, dt, i)?;
+            fraction += spec.g;
+        }
+        if fraction > 1.0 + 1e-12 {
+            return Err(ParamError::FractionsAboveOne { sum: fraction });
+        }
+        Ok(Self {
+            form,
+            tangent_gain: tangent_gain(&cells),
+            cells,
+            fraction,
+            dt,
+            acc: PhantomData,
+        })
+    }
+
+    /// The form of every cell.
+    pub fn form(&self) -> MaxwellForm {
+        self.form
+    }
+
+    /// Branch forces of a state, given the backbone force at its step.
+    pub fn branch_forces(&self, state: &[A; N], f_inf: T) -> [T; N] {
+        let mut out = [T::ZERO; N];
+        let shift = self.form.is_load();
+        for ((o, s), c) in out.iter_mut().zip(state).zip(&self.cells) {
+            *o = s.value() + if shift { c.g * f_inf } else { T::ZERO };
+        }
+        out
+    }
+}
+
+impl<T: Real, const N: usize, A: Accumulator<T>> Effect<T> for MaxwellBank<T, N, A> {
+    type State = [A; N];
+    type Report = EffectOutput<T>;
+
+    fn fraction(&self) -> f64 {
+        self.fraction
+    }
+    fn dt(&self) -> Option<f64> {
+        Some(self.dt)
+    }
+    fn rest(&self) -> [A; N] {
+        [A::default(); N]
+    }
+    #[inline(always)]
+    fn step(&self, state: &mut [A; N], drive: &Drive<T>) -> EffectOutput<T> {
+        step_cells(self.form, &self.cells, state, self.tangent_gain, drive)
+    }
+    #[inline(always)]
+    fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
+        *report
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Compensated;
+    use crate::backbone::Polynomial;
+    use crate::bushing::Bushing;
+
+    const SPECS: [MaxwellSpec; 3] = [
+        MaxwellSpec::new(3.0, 0.1),
+        MaxwellSpec::new(30.0, 0.2),
+        MaxwellSpec::new(300.0, 0.15),
+    ];
+
+    #[test]
+    fn explicit_forms_refuse_omega_dt_at_or_above_one() {
+        for form in [MaxwellForm::LoadExplicit, MaxwellForm::RateExplicit] {
+            let e = MaxwellBank::<f64, 1>::new(form, &[MaxwellSpec::new(1000.0, 0.1)], 1e-3)
+                .unwrap_err();
+            assert_eq!(
+                e,
+                ParamError::ExplicitUnstable {
+                    cell: 0,
+                    omega_dt: 1.0
+                }
+            );
+            assert!(
+                MaxwellBank::<f64, 1>::new(form, &[MaxwellSpec::new(999.0, 0.1)], 1e-3).is_ok()
+            );
+        }
+        // The exponential forms take any h.
+        for form in [
+            MaxwellForm::LoadExponential,
+            MaxwellForm::RateMidpoint,
+            MaxwellForm::RateExactRamp,
+        ] {
+            assert!(MaxwellBank::<f32, 1>::new(form, &[MaxwellSpec::new(1e7, 0.1)], 1e-3).is_ok());
+        }
+    }
+
+    #[test]
+    fn bad_parameters_name_the_cell() {
+        type B = MaxwellBank<f64, 2>;
+        let f = MaxwellForm::RateExactRamp;
+        let ok = MaxwellSpec::new(1.0, 0.1);
+        assert_eq!(
+            B::new(f, &[ok, MaxwellSpec::new(-1.0, 0.1)], 1e-3),
+            Err(ParamError::NotPositive {
+                param: Param::item("omega", 1),
+                value: -1.0
+            })
+        );
+        assert_eq!(
+            B::new(f, &[MaxwellSpec::new(1.0, f64::NAN), ok], 1e-3),
+            Err(ParamError::NotFinite {
+                param: Param::item("g", 0)
+            })
+        );
+        assert_eq!(
+            B::new(f, &[ok, ok], 0.0),
+            Err(ParamError::NotPositive {
+                param: Param::scalar("dt"),
+                value: 0.0
+            })
+        );
+        assert_eq!(
+            B::new(
+                f,
+                &[MaxwellSpec::new(1.0, 0.6), MaxwellSpec::new(2.0, 0.6)],
+                1e-3
+            ),
+            Err(ParamError::FractionsAboveOne { sum: 1.2 })
+        );
+    }
+
+    #[test]
+    fn every_form_relaxes_to_the_long_term_force_after_a_step() {
+        for form in MaxwellForm::ALL {
+            let bank = MaxwellBank::<f64, 3>::new(form, &SPECS, 1e-4).unwrap();
+            let b = Bushing::new(Polynomial::<f64, 2>::linear(1000.0).unwrap(), bank).unwrap();
+            let mut s = b.state_at(0.0);
+            let first = b.step(&mut s, 1e-3);
+            // Just after the step: close to the high-frequency force K^inf x
+            // (one step of relaxation already done).
+            assert!(
+                first.force > 0.93 && first.force <= 1.0 + 1e-12,
+                "{form:?}: {}",
+                first.force
+            );
+            let mut out = first;
+            for _ in 0..200_000 {
+                out = b.step(&mut s, 1e-3);
+            }
+            // 20 s later the slowest cell (3 rad/s) has decayed by e^-60. Every
+            // form settles on g0 F^inf exactly, except (1.15), whose trapezoid
+            // leaves a static-gain error: each relaxation settles on
+            // -g (h/2)/sinh(h/2) F^inf instead of -g F^inf.
+            let bias: f64 = if form == MaxwellForm::LoadExponential {
+                SPECS
+                    .iter()
+                    .map(|c| {
+                        let h = c.omega * 1e-4;
+                        c.g * (1.0 - 0.5 * h / libm::sinh(0.5 * h))
+                    })
+                    .sum()
+            } else {
+                0.0
+            };
+            let long_term = (b.g0() + bias) * 1000.0 * 1e-3;
+            assert!(
+                (out.force - long_term).abs() < 1e-9,
+                "{form:?}: {} vs {long_term}",
+                out.force
+            );
+        }
+    }
+
+    #[test]
+    fn bank_force_is_the_same_branch_force_in_load_and_rate_forms() {
+        // Exponential load (1.15) and exact ramp differ by O(h^2) per step; at
+        // a small step they must agree on the branch forces.
+        let dt = 1e-5;
+        let a = MaxwellBank::<f64, 3>::new(MaxwellForm::LoadExponential, &SPECS, dt).unwrap();
+        let b = MaxwellBank::<f64, 3>::new(MaxwellForm::RateExactRamp, &SPECS, dt).unwrap();
+        let (mut sa, mut sb) = (a.rest(), b.rest());
+        let mut f_prev = 0.0;
+        for n in 1..=20_000 {
+            let t = n as f64 * dt;
+            let f = 100.0 * libm::sin(20.0 * t);
+            let d = Drive {
+                x: f,
+                dx: 0.0,
+                f_inf: f,
+                df_inf: f - f_prev,
+                k_inf: 1.0,
+            };
+            let (oa, ob) = (a.step(&mut sa, &d), b.step(&mut sb, &d));
+            assert!(
+                (oa.force - ob.force).abs() < 1e-3,
+                "t = {t}: {} vs {}",
+                oa.force,
+                ob.force
+            );
+            f_prev = f;
+        }
+        let fa = a.branch_forces(&sa, f_prev);
+        let fb = b.branch_forces(&sb, f_prev);
+        for (x, y) in fa.iter().zip(&fb) {
+            assert!((x - y).abs() < 1e-3);
+        }
+    }
+
+    #[test]
+    fn slow_f32_cell_keeps_its_decay_rate() {
+        // omega*dt = 1e-6: the decay rate over 1e5 steps within 0.1 % of exact
+        // with the compensated state.
+        let h = 1e-6;
+        let bank = MaxwellBank::<f32, 1, Compensated<f32>>::new(
+            MaxwellForm::RateExactRamp,
+            &[MaxwellSpec::new(h, 0.5)],
+            1.0,
+        )
+        .unwrap();
+        let mut s = bank.rest();
+        let drive = |df: f32| Drive {
+            x: 0.0,
+            dx: 0.0,
+            f_inf: 1.0,
+            df_inf: df,
+            k_inf: 1.0,
+        };
+        let f0 = bank.step(&mut s, &drive(1.0)).force as f64;
+        let mut f = f0;
+        let n = 100_000;
+        for _ in 0..n {
+            f = bank.step(&mut s, &drive(0.0)).force as f64;
+        }
+        let rate = -(f / f0).ln() / n as f64;
+        assert!((rate / h - 1.0).abs() < 1e-3, "rate {rate}");
+    }
+}
