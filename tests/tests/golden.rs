@@ -1,0 +1,16 @@
+//! Prints the golden-trace hash computed on the host, and checks it against
+//! the committed constant that the Cortex-M suite also requires.
+
+#[test]
+fn golden_trace_hash_is_the_committed_one() {
+    let h = bushing_tests::golden_trace().expect("golden trace runs");
+    println!(
+        "golden trace hash over {} steps: {h:#018x}",
+        bushing_tests::GOLDEN_STEPS
+    );
+    assert_eq!(
+        h,
+        bushing_tests::GOLDEN_HASH,
+        "kernel output changed; if deliberate, set GOLDEN_HASH = {h:#018x}"
+    );
+}
