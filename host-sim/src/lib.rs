@@ -1,0 +1,18 @@
+//! # bushing-sim: scenes, traces, plots and accuracy reports
+//!
+//! The host side of the `bushing` library. A *scene* (TOML, see
+//! `docs/scenes.md`) names a backbone, the effects to simulate with their
+//! parameters, the rate, the number type and a displacement profile;
+//! [`run::run`] builds only those effects, steps them and writes a CSV
+//! trace and SVG plots. [`modulus`] measures the steady-state complex
+//! modulus of the Maxwell forms against the closed form.
+#![forbid(unsafe_code)]
+
+pub mod model;
+pub mod modulus;
+pub mod profile;
+pub mod run;
+pub mod scene;
+pub mod svg;
+
+pub use scene::{Scene, SceneError};

@@ -1,0 +1,478 @@
+//! Scene files: what to simulate, at which rate and in which number type,
+//! under which displacement profile. See `docs/scenes.md`.
+//!
+//! Parsing is two-staged: TOML into plain structs (syntax and shape errors
+//! carry the line and column), then validation into model parameters
+//! (parameter errors name the effect, the parameter and the bound, at the
+//! line of the effect's table).
+
+use std::fmt;
+use std::ops::Range;
+use std::path::Path;
+
+use bushing::{MaxwellForm, MaxwellSpec, ParamError};
+use serde::Deserialize;
+use toml::Spanned;
+
+/// A scene file, as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// Free text shown in reports.
+    #[serde(default)]
+    pub title: String,
+    /// Rate and number type.
+    pub run: Spanned<RunSpec>,
+    /// The elastic backbone F^∞(x).
+    pub backbone: Spanned<BackboneSpec>,
+    /// Dissipative effects, each with its parameters; only these are built.
+    #[serde(default)]
+    pub effects: Vec<Spanned<EffectSpec>>,
+    /// Displacement profile.
+    pub profile: Spanned<ProfileSpec>,
+}
+
+/// `[run]`: time step and number type.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSpec {
+    /// Sampling rate in Hz (the time step is its inverse).
+    pub rate_hz: f64,
+    /// Working type of the models.
+    #[serde(default)]
+    pub number: NumberType,
+}
+
+/// Working type of the models.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NumberType {
+    /// Single precision, as on a Cortex-M4F.
+    #[default]
+    F32,
+    /// Double precision.
+    F64,
+}
+
+impl NumberType {
+    /// Name as written in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::F32 => "f32",
+            Self::F64 => "f64",
+        }
+    }
+}
+
+/// `[backbone]`: F^∞(x) in N for x in mm.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum BackboneSpec {
+    /// F = c0 + c1 x + c2 x^2 + ... on `range`, linear outside.
+    Polynomial {
+        /// Coefficients c0, c1, ... (N/mm^k), at most 8.
+        coefficients: Vec<f64>,
+        /// Validity range [lo, hi] in mm.
+        range: [f64; 2],
+    },
+    /// Monotone cubic spline through measured points, linear outside.
+    Spline {
+        /// Displacements in mm, increasing.
+        x: Vec<f64>,
+        /// Forces in N, increasing.
+        force: Vec<f64>,
+    },
+}
+
+/// One `[[effects]]` table.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum EffectSpec {
+    /// A bank of Maxwell cells.
+    Maxwell {
+        /// Discrete form: load-explicit, load-exponential, rate-explicit,
+        /// rate-midpoint or rate-exact-ramp.
+        form: String,
+        /// State storage: "plain" or "compensated".
+        #[serde(default = "default_state")]
+        state: String,
+        /// The cells.
+        cells: Vec<CellSpec>,
+    },
+}
+
+fn default_state() -> String {
+    "plain".into()
+}
+
+impl EffectSpec {
+    /// Name of the effect kind, as in scene files.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Maxwell { .. } => "maxwell",
+        }
+    }
+}
+
+/// One Maxwell cell: corner frequency in Hz and load fraction.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CellSpec {
+    /// Corner frequency in Hz (ω = 2π f).
+    pub f_hz: f64,
+    /// Load fraction g of the high-frequency backbone.
+    pub g: f64,
+}
+
+/// `[profile]`: the imposed displacement x(t) in mm.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum ProfileSpec {
+    /// x = preload + amplitude sin(2π f t).
+    Sine {
+        /// Amplitude in mm.
+        amplitude: f64,
+        /// Frequency in Hz.
+        frequency_hz: f64,
+        /// Number of cycles.
+        cycles: f64,
+        /// Static offset in mm.
+        #[serde(default)]
+        preload: f64,
+    },
+    /// Triangle between preload ± amplitude at constant speed, starting
+    /// upward from the preload.
+    Triangle {
+        /// Amplitude in mm.
+        amplitude: f64,
+        /// Speed in mm/s.
+        speed: f64,
+        /// Number of cycles.
+        cycles: f64,
+        /// Static offset in mm.
+        #[serde(default)]
+        preload: f64,
+    },
+}
+
+/// Where in a file something went wrong: 1-based line and column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Location {
+    /// Line, from 1.
+    pub line: usize,
+    /// Column, from 1 (in characters).
+    pub column: usize,
+}
+
+impl Location {
+    /// Location of byte offset `at` in `text`.
+    pub fn of(text: &str, at: usize) -> Self {
+        let at = at.min(text.len());
+        let before = text.get(..at).unwrap_or(text);
+        let line = before.matches('\n').count() + 1;
+        let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        Self { line, column }
+    }
+}
+
+/// A scene that could not be read or built.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneError {
+    /// File name as given.
+    pub file: String,
+    /// Position of the mistake, when known.
+    pub at: Option<Location>,
+    /// What was expected.
+    pub message: String,
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.at {
+            Some(l) => write!(f, "{}:{}:{}: {}", self.file, l.line, l.column, self.message),
+            None => write!(f, "{}: {}", self.file, self.message),
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// A scene read and checked: every value is in range and every model can
+/// be built (the models themselves are built by [`crate::model`]).
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// Title.
+    pub title: String,
+    /// Time step in s.
+    pub dt: f64,
+    /// Working type.
+    pub number: NumberType,
+    /// Backbone.
+    pub backbone: BackboneSpec,
+    /// Effects, validated.
+    pub effects: Vec<Effect>,
+    /// Profile.
+    pub profile: ProfileSpec,
+}
+
+/// A validated effect.
+#[derive(Debug, Clone)]
+pub enum Effect {
+    /// A Maxwell bank.
+    Maxwell {
+        /// Form.
+        form: MaxwellForm,
+        /// Compensated state storage.
+        compensated: bool,
+        /// Cells (ω in rad/s).
+        cells: Vec<MaxwellSpec>,
+    },
+}
+
+impl Effect {
+    /// Name for reports and trace columns.
+    pub fn name(&self) -> String {
+        match self {
+            Self::Maxwell { form, cells, .. } => {
+                format!("maxwell {} x{}", form.name(), cells.len())
+            }
+        }
+    }
+}
+
+/// Largest bank a scene may ask for.
+pub const MAX_CELLS: usize = 64;
+/// Largest number of steps a scene may ask for.
+pub const MAX_STEPS: u64 = 2_000_000_000;
+
+impl Scene {
+    /// Reads and checks a scene file.
+    pub fn load(path: &Path) -> Result<Self, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: file.clone(),
+            at: None,
+            message: format!("cannot read: {e}"),
+        })?;
+        Self::parse(&file, &text)
+    }
+
+    /// Parses and checks scene text; `file` names it in errors.
+    pub fn parse(file: &str, text: &str) -> Result<Self, SceneError> {
+        let err = |span: Option<Range<usize>>, message: String| SceneError {
+            file: file.to_string(),
+            at: span.map(|s| Location::of(text, s.start)),
+            message,
+        };
+        let raw: SceneFile =
+            toml::from_str(text).map_err(|e| err(e.span(), e.message().trim().to_string()))?;
+
+        let run_span = raw.run.span();
+        let run = raw.run.into_inner();
+        if !(run.rate_hz.is_finite() && run.rate_hz > 0.0 && run.rate_hz <= 1e9) {
+            return Err(err(
+                Some(run_span),
+                format!("run.rate_hz must be in (0, 1e9] Hz, got {}", run.rate_hz),
+            ));
+        }
+        let dt = 1.0 / run.rate_hz;
+
+        let bb_span = raw.backbone.span();
+        let backbone = raw.backbone.into_inner();
+        crate::model::check_backbone(&backbone)
+            .map_err(|e| err(Some(bb_span.clone()), format!("backbone: {e}")))?;
+
+        let mut effects = Vec::new();
+        let mut seen = Vec::new();
+        for (i, spanned) in raw.effects.into_iter().enumerate() {
+            let span = spanned.span();
+            let spec = spanned.into_inner();
+            let kind = spec.kind();
+            if seen.contains(&kind) {
+                return Err(err(
+                    Some(span),
+                    format!(
+                        "effects[{i}]: a second '{kind}' effect; put all its cells in one table"
+                    ),
+                ));
+            }
+            seen.push(kind);
+            let effect = validate_effect(spec, dt)
+                .map_err(|m| err(Some(span.clone()), format!("effects[{i}] ({kind}): {m}")))?;
+            effects.push(effect);
+        }
+        let sum: f64 = effects
+            .iter()
+            .map(|e| match e {
+                Effect::Maxwell { cells, .. } => cells.iter().map(|c| c.g).sum::<f64>(),
+            })
+            .sum();
+        if sum > 1.0 + 1e-12 {
+            return Err(err(None, ParamError::FractionsAboveOne { sum }.to_string()));
+        }
+
+        let pr_span = raw.profile.span();
+        let profile = raw.profile.into_inner();
+        let steps = crate::profile::steps(&profile, dt)
+            .map_err(|m| err(Some(pr_span.clone()), format!("profile: {m}")))?;
+        if steps > MAX_STEPS {
+            return Err(err(
+                Some(pr_span),
+                format!("profile: {steps} steps, more than the limit of {MAX_STEPS}"),
+            ));
+        }
+        Ok(Self {
+            title: raw.title,
+            dt,
+            number: run.number,
+            backbone,
+            effects,
+            profile,
+        })
+    }
+
+    /// Number of steps the profile takes.
+    pub fn steps(&self) -> u64 {
+        crate::profile::steps(&self.profile, self.dt).unwrap_or(0)
+    }
+}
+
+fn validate_effect(spec: EffectSpec, dt: f64) -> Result<Effect, String> {
+    match spec {
+        EffectSpec::Maxwell { form, state, cells } => {
+            let form = MaxwellForm::from_name(&form).ok_or_else(|| {
+                let names: Vec<_> = MaxwellForm::ALL.iter().map(|f| f.name()).collect();
+                format!("form '{form}' is not one of {}", names.join(", "))
+            })?;
+            let compensated = match state.as_str() {
+                "plain" => false,
+                "compensated" => true,
+                other => return Err(format!("state '{other}' is not one of plain, compensated")),
+            };
+            if cells.is_empty() || cells.len() > MAX_CELLS {
+                return Err(format!(
+                    "1 to {MAX_CELLS} cells expected, got {}",
+                    cells.len()
+                ));
+            }
+            for (i, c) in cells.iter().enumerate() {
+                if !(c.f_hz.is_finite() && c.f_hz > 0.0) {
+                    return Err(format!(
+                        "cells[{i}].f_hz must be finite and > 0 Hz, got {}",
+                        c.f_hz
+                    ));
+                }
+            }
+            let cells: Vec<MaxwellSpec> =
+                cells.iter().map(|c| MaxwellSpec::hz(c.f_hz, c.g)).collect();
+            // Build each cell once to run every parameter check of the core.
+            for (i, c) in cells.iter().enumerate() {
+                bushing::MaxwellCell::<f64>::new(form, *c, dt, i).map_err(|e| e.to_string())?;
+            }
+            let sum: f64 = cells.iter().map(|c| c.g).sum();
+            if sum > 1.0 + 1e-12 {
+                return Err(ParamError::FractionsAboveOne { sum }.to_string());
+            }
+            Ok(Effect::Maxwell {
+                form,
+                compensated,
+                cells,
+            })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"
+title = "t"
+[run]
+rate_hz = 1000
+number = "f64"
+[backbone]
+type = "polynomial"
+coefficients = [0.0, 100.0]
+range = [-1.0, 1.0]
+[[effects]]
+type = "maxwell"
+form = "rate-exact-ramp"
+cells = [{ f_hz = 1.0, g = 0.2 }]
+[profile]
+type = "sine"
+amplitude = 1.0
+frequency_hz = 2.0
+cycles = 3
+"#;
+
+    #[test]
+    fn a_good_scene_parses() {
+        let s = Scene::parse("good.toml", GOOD).unwrap();
+        assert_eq!(s.dt, 1e-3);
+        assert_eq!(s.number, NumberType::F64);
+        assert_eq!(s.steps(), 1500);
+        assert_eq!(s.effects.len(), 1);
+    }
+
+    #[test]
+    fn syntax_errors_carry_line_and_column() {
+        let bad = GOOD.replace("rate_hz = 1000", "rate_hz = = 1000");
+        let e = Scene::parse("bad.toml", &bad).unwrap_err();
+        assert_eq!(e.at.map(|l| l.line), Some(4), "{e}");
+        assert!(e.to_string().starts_with("bad.toml:4:"), "{e}");
+    }
+
+    #[test]
+    fn unknown_fields_and_kinds_are_located() {
+        let bad = GOOD.replace("amplitude = 1.0", "amplitud = 1.0");
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
+        assert!(e.message.contains("amplitud"), "{e}");
+        assert!(e.at.is_some());
+        let bad = GOOD.replace("type = \"maxwell\"", "type = \"maxwel\"");
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
+        assert!(e.message.contains("maxwel"), "{e}");
+        assert_eq!(e.at.map(|l| l.line), Some(11), "{e}");
+    }
+
+    #[test]
+    fn bad_parameters_name_effect_parameter_and_bound() {
+        let bad = GOOD.replace("f_hz = 1.0", "f_hz = -1.0");
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
+        assert!(
+            e.message.contains("effects[0] (maxwell)")
+                && e.message.contains("cells[0].f_hz must be finite and > 0"),
+            "{e}"
+        );
+        // The effect's [[effects]] header.
+        assert_eq!(e.at.map(|l| l.line), Some(10), "{e}");
+        let bad = GOOD
+            .replace("rate-exact-ramp", "rate-explicit")
+            .replace("f_hz = 1.0", "f_hz = 200.0");
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
+        assert!(e.message.contains("omega*dt = 1.25"), "{e}");
+        let bad = GOOD.replace("g = 0.2", "g = 1.5");
+        assert!(
+            Scene::parse("s.toml", &bad)
+                .unwrap_err()
+                .message
+                .contains("above 1")
+        );
+        let bad = GOOD.replace(
+            "coefficients = [0.0, 100.0]",
+            "coefficients = [0.0, -100.0]",
+        );
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
+        assert!(e.message.starts_with("backbone: backbone tangent"), "{e}");
+        assert_eq!(e.at.map(|l| l.line), Some(6), "{e}");
+    }
+
+    #[test]
+    fn location_counts_characters() {
+        assert_eq!(
+            Location::of("ab\ncé\nx", 6),
+            Location { line: 2, column: 3 }
+        );
+        assert_eq!(Location::of("", 10), Location { line: 1, column: 1 });
+    }
+}
