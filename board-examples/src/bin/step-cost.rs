@@ -1,0 +1,113 @@
+//! Guest instructions per bushing step on Cortex-M, read from SysTick under
+//! QEMU `-icount shift=0` (one tick per 40 instructions at the 25 MHz core
+//! clock of the MPS2 boards). Prints one line per kernel and exits through
+//! semihosting. QEMU counts instructions: no pipeline, FPU latency or flash
+//! wait states.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(target_os = "none")]
+mod firmware {
+    use bushing::MaxwellForm;
+    use bushing_boards::{maxwell4, maxwell4_compensated, polynomial, run, spline, triangle};
+    use cortex_m::peripheral::{SYST, syst::SystClkSource};
+    use cortex_m_rt::entry;
+    use cortex_m_semihosting::{debug, hprintln};
+    use panic_semihosting as _;
+
+    const STEPS: usize = 2000;
+    const INSTRUCTIONS_PER_TICK: u32 = 40;
+
+    /// SysTick ticks taken by `f` (the counter runs free and counts down).
+    fn ticks(_: &mut SYST, f: impl FnOnce()) -> u32 {
+        let start = SYST::get_current();
+        f();
+        let end = SYST::get_current();
+        start.wrapping_sub(end) & 0x00FF_FFFF
+    }
+
+    /// Instructions per step, times 10, net of the empty loop.
+    fn per_step(syst: &mut SYST, baseline: u32, f: impl FnOnce()) -> u32 {
+        let t = ticks(syst, f).saturating_sub(baseline);
+        t * INSTRUCTIONS_PER_TICK * 10 / STEPS as u32
+    }
+
+    fn report(name: &str, tenths: u32) {
+        hprintln!(
+            "{:<44} {:>5}.{} instructions/step",
+            name,
+            tenths / 10,
+            tenths % 10
+        );
+    }
+
+    #[entry]
+    fn main() -> ! {
+        let Some(p) = cortex_m::Peripherals::take() else {
+            debug::exit(debug::EXIT_FAILURE);
+            loop {
+                cortex_m::asm::nop();
+            }
+        };
+        let mut syst = p.SYST;
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(0x00FF_FFFF);
+        syst.clear_current();
+        syst.enable_counter();
+        let xs = triangle::<STEPS>();
+        let baseline = ticks(&mut syst, || {
+            for &x in &xs {
+                core::hint::black_box(x);
+            }
+        });
+        let Ok(poly) = polynomial() else { fail() };
+        let Ok(spl) = spline() else { fail() };
+        let Ok(bare) = bushing::Bushing::new(poly, ()) else {
+            fail()
+        };
+        let Ok(bare_spline) = bushing::Bushing::new(spl, ()) else {
+            fail()
+        };
+        hprintln!("bushing step cost, f32, {} steps, triangle input", STEPS);
+        let force_only = |f: f32, _: f32, _: f32| {
+            core::hint::black_box(f);
+        };
+        let all = |f: f32, k: f32, e: f32| {
+            core::hint::black_box((f, k, e));
+        };
+        let t = per_step(&mut syst, baseline, || run(&bare, &xs, force_only));
+        report("polynomial backbone only", t);
+        let t = per_step(&mut syst, baseline, || run(&bare_spline, &xs, force_only));
+        report("spline backbone (8 points) only", t);
+        for form in MaxwellForm::ALL {
+            let Ok(b) = maxwell4(form) else { fail() };
+            let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+            report(form.name(), t);
+            let t = per_step(&mut syst, baseline, || run(&b, &xs, all));
+            report("  + tangent and dissipated energy", t);
+        }
+        let Ok(b) = maxwell4_compensated() else {
+            fail()
+        };
+        let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+        report("rate-exact-ramp, compensated state", t);
+        debug::exit(debug::EXIT_SUCCESS);
+        loop {
+            cortex_m::asm::nop();
+        }
+    }
+
+    fn fail() -> ! {
+        hprintln!("parameters refused");
+        debug::exit(debug::EXIT_FAILURE);
+        loop {
+            cortex_m::asm::nop();
+        }
+    }
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {
+    println!(
+        "step-cost is firmware: cargo run --release -p bushing-boards --target thumbv7em-none-eabihf"
+    );
+}
