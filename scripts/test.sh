@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# The project's test command. On a machine that has only Rust it installs
+# what is missing (Cortex-M targets, clippy/rustfmt, QEMU), then runs:
+#   1. formatting and lints (host, and the Cortex-M crates for the target);
+#   2. core-nostd builds for Cortex-M4F (thumbv7em-none-eabihf) and
+#      Cortex-M3 without FPU (thumbv7m-none-eabi);
+#   3. the Cortex-M suite under QEMU: M4F debug and release, M3 release;
+#      QEMU's exit code is the verdict, a hang is killed by `timeout`;
+#   4. the step-cost firmware under QEMU (guest instructions per step);
+#   5. the host tests (unit, integration, doc).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+as_root() {
+    if [ "$(id -u)" -eq 0 ]; then "$@"
+    elif command -v sudo >/dev/null 2>&1; then sudo "$@"
+    else echo "error: need root to run: $*" >&2; return 1
+    fi
+}
+
+step() { printf '\n==> %s\n' "$*"; }
+
+step "toolchain: Cortex-M targets, clippy, rustfmt"
+installed_targets=$(rustup target list --installed)
+for target in thumbv7em-none-eabihf thumbv7m-none-eabi; do
+    grep -qx "$target" <<<"$installed_targets" || rustup target add "$target"
+done
+installed_components=$(rustup component list --installed)
+for component in clippy rustfmt; do
+    grep -q "^$component" <<<"$installed_components" || rustup component add "$component"
+done
+
+if ! command -v qemu-system-arm >/dev/null 2>&1; then
+    step "installing qemu-system-arm"
+    as_root apt-get update -qq
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq qemu-system-arm >/dev/null
+fi
+qemu-system-arm --version | head -n 1
+
+step "format"
+cargo fmt --all -- --check
+
+step "lints (host, all targets)"
+cargo clippy --workspace --all-targets -- -D warnings
+
+step "lints (Cortex-M4F: core, suite, firmware)"
+cargo clippy -p bushing --target thumbv7em-none-eabihf -- -D warnings
+cargo clippy -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m -- -D warnings
+cargo clippy -p bushing-boards --target thumbv7em-none-eabihf --bins -- -D warnings
+
+step "core-nostd for Cortex-M4F and Cortex-M3 (no FPU)"
+cargo build -p bushing --release --target thumbv7em-none-eabihf
+cargo build -p bushing --release --target thumbv7m-none-eabi
+
+step "Cortex-M suite in QEMU: M4F (mps2-an386), debug and release"
+cargo test -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m
+cargo test -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m --release
+
+step "Cortex-M suite in QEMU: M3 (mps2-an385), soft float, release"
+cargo test -p bushing-tests --target thumbv7m-none-eabi --test cortex_m --release
+
+step "step cost on Cortex-M4F in QEMU (guest instructions per step)"
+cargo run -p bushing-boards --release --target thumbv7em-none-eabihf --bin step-cost
+
+step "host tests"
+cargo test
