@@ -6,8 +6,8 @@
 use core::f64::consts::PI;
 
 use bushing::{
-    Backbone, Bushing, Compensated, Effect, MaxwellBank, MaxwellForm, MaxwellSpec, MonotoneSpline,
-    ParamError, Polynomial,
+    Backbone, Bushing, Compensated, Effect, IwanBank, IwanCellSpec, IwanSliders, MaxwellBank,
+    MaxwellForm, MaxwellSpec, MonotoneSpline, ParamError, Polynomial, XfBank, XfForm, XfSpec,
 };
 
 /// Control period of the probes: 2 kHz.
@@ -51,6 +51,56 @@ pub fn maxwell4_compensated() -> Result<Maxwell4Compensated, ParamError> {
         polynomial()?,
         (MaxwellBank::new(MaxwellForm::RateExactRamp, &CELLS, DT)?,),
     )
+}
+
+/// Four Jenkins cells, slip distances 0.05 to 1 mm on 150 N/mm.
+pub const JENKINS: [IwanCellSpec; 4] = [
+    IwanCellSpec::new(0.08, 0.08 * 150.0 * 0.05),
+    IwanCellSpec::new(0.08, 0.08 * 150.0 * 0.2),
+    IwanCellSpec::new(0.08, 0.08 * 150.0 * 0.5),
+    IwanCellSpec::new(0.08, 0.08 * 150.0 * 1.0),
+];
+
+/// Polynomial backbone with a 4-cell Iwan bank, clamp form.
+pub type Iwan4 = Bushing<f32, Polynomial<f32, 4>, (IwanBank<f32, 4>,)>;
+/// Polynomial backbone with a 4-cell Iwan bank, slider form.
+pub type Sliders4 = Bushing<f32, Polynomial<f32, 4>, (IwanSliders<f32, 4>,)>;
+/// Polynomial backbone with two x_f cells.
+pub type Xf2 = Bushing<f32, Polynomial<f32, 4>, (XfBank<f32, 2>,)>;
+/// The thesis's final model: backbone, 3 Maxwell, 3 Jenkins, 1 x_f cell.
+pub type Composite =
+    Bushing<f32, Polynomial<f32, 4>, (MaxwellBank<f32, 3>, IwanBank<f32, 3>, XfBank<f32, 1>)>;
+
+/// The clamp-form Iwan probe.
+pub fn iwan4() -> Result<Iwan4, ParamError> {
+    Bushing::new(polynomial()?, (IwanBank::new(&JENKINS)?,))
+}
+
+/// The slider-form Iwan probe.
+pub fn sliders4() -> Result<Sliders4, ParamError> {
+    Bushing::new(polynomial()?, (IwanSliders::new(&JENKINS, 150.0)?,))
+}
+
+/// Two x_f cells (0.005 Hz and 5 Hz) in `form`.
+pub fn xf2(form: XfForm) -> Result<Xf2, ParamError> {
+    let cells = [XfSpec::hz(0.005, 0.2, 0.02), XfSpec::hz(5.0, 0.1, 0.002)];
+    Bushing::new(polynomial()?, (XfBank::new(form, &cells, DT)?,))
+}
+
+/// Backbone + 3 Maxwell (exact ramp) + 3 Jenkins (clamp) + 1 x_f (exact ramp).
+pub fn composite() -> Result<Composite, ParamError> {
+    let maxwell = MaxwellBank::new(
+        MaxwellForm::RateExactRamp,
+        &[
+            MaxwellSpec::hz(0.5, 0.08),
+            MaxwellSpec::hz(5.0, 0.1),
+            MaxwellSpec::hz(50.0, 0.04),
+        ],
+        DT,
+    )?;
+    let jenkins = [JENKINS[0], JENKINS[1], JENKINS[2]];
+    let xf = XfBank::new(XfForm::ExactRamp, &[XfSpec::hz(0.005, 0.2, 0.02)], DT)?;
+    Bushing::new(polynomial()?, (maxwell, IwanBank::new(&jenkins)?, xf))
 }
 
 /// Triangle input of `N` samples between -2 and 2 mm.

@@ -5,10 +5,13 @@
 //! bushings in multibody dynamics* (2021), "seed 000" in the project docs.
 //!
 //! A bushing force is a hyperelastic **backbone** F^∞(x) ([`backbone`]) plus
-//! dissipative **effects** that take fractions g^i of it: so far the
-//! generalised Maxwell cells of [`maxwell`] in all five discrete forms of the
-//! thesis. A [`Bushing`] joins them; effects compose as tuples at compile
-//! time, so an effect a firmware build does not name costs nothing.
+//! dissipative **effects** that take fractions g^i of it: the generalised
+//! Maxwell cells of [`maxwell`] in all five discrete forms of the thesis,
+//! the Iwan banks of Jenkins cells of [`iwan`] (force-saturation and slider
+//! forms) and the nonlinear viscous x_f cells of [`xf`], between
+//! viscoelasticity and friction. A [`Bushing`] joins them; effects compose as
+//! tuples at compile time, so an effect a firmware build does not name costs
+//! nothing.
 //!
 //! ## The contract
 //!
@@ -49,16 +52,23 @@
     )
 )]
 
+#[cfg(test)]
+extern crate alloc;
+
 pub mod accumulator;
 pub mod backbone;
 pub mod bushing;
 pub mod error;
+pub mod iwan;
 pub mod maxwell;
 pub mod real;
+pub mod xf;
 
 pub use accumulator::{Accumulator, Compensated, Plain};
 pub use backbone::{Backbone, MonotoneSpline, Polynomial};
 pub use bushing::{Bushing, BushingState, Drive, Effect, EffectOutput, Output};
 pub use error::{Faults, Param, ParamError};
+pub use iwan::{IwanBank, IwanCellSpec, IwanSliders};
 pub use maxwell::{MaxwellBank, MaxwellCell, MaxwellForm, MaxwellSpec};
 pub use real::Real;
+pub use xf::{XfBank, XfForm, XfSpec};

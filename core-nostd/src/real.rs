@@ -48,10 +48,24 @@ pub trait Real:
     fn abs(self) -> Self;
     /// The IEEE bit pattern, widened to 64 bits (golden traces).
     fn bits(self) -> u64;
+    /// The smaller of two values (the other one if either is NaN).
+    fn min(self, other: Self) -> Self;
+    /// The larger of two values (the other one if either is NaN).
+    fn max(self, other: Self) -> Self;
+    /// e^self through libm (`expf`: about 38 guest instructions on a
+    /// Cortex-M4F). Only the cells whose coefficients depend on the state
+    /// (the x_f cell) call it per step.
+    fn exp(self) -> Self;
+    /// e^self - 1 through libm, accurate near 0 (`expm1f`), for decays
+    /// formed at run time.
+    fn exp_m1(self) -> Self;
+    /// Square root through libm (`sqrtf`: about 77 guest instructions on a
+    /// Cortex-M4F, which has no `vsqrt` path in libm).
+    fn sqrt(self) -> Self;
 }
 
 macro_rules! impl_real {
-    ($t:ty, $guard:expr, $bits:expr) => {
+    ($t:ty, $guard:expr, $bits:expr, $exp:path, $expm1:path, $sqrt:path) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -80,15 +94,45 @@ macro_rules! impl_real {
                 let to_u64: fn($t) -> u64 = $bits;
                 to_u64(self)
             }
+            #[inline(always)]
+            fn min(self, other: Self) -> Self {
+                <$t>::min(self, other)
+            }
+            #[inline(always)]
+            fn max(self, other: Self) -> Self {
+                <$t>::max(self, other)
+            }
+            #[inline(always)]
+            fn exp(self) -> Self {
+                $exp(self)
+            }
+            #[inline(always)]
+            fn exp_m1(self) -> Self {
+                $expm1(self)
+            }
+            #[inline(always)]
+            fn sqrt(self) -> Self {
+                $sqrt(self)
+            }
         }
     };
 }
 
-impl_real!(f32, 1.152_921_5e18 /* 2^60 */, |v| v.to_bits() as u64);
+impl_real!(
+    f32,
+    1.152_921_5e18, // 2^60
+    |v| v.to_bits() as u64,
+    libm::expf,
+    libm::expm1f,
+    libm::sqrtf
+);
 impl_real!(
     f64,
-    3.273_390_607_896_142e150, /* 2^500 */
-    |v| v.to_bits()
+    3.273_390_607_896_142e150, // 2^500
+    |v| v.to_bits(),
+    libm::exp,
+    libm::expm1,
+    libm::sqrt
 );
 
 #[cfg(test)]

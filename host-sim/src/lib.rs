@@ -14,5 +14,6 @@ pub mod profile;
 pub mod run;
 pub mod scene;
 pub mod svg;
+pub mod xf_report;
 
 pub use scene::{Scene, SceneError};

@@ -3,12 +3,13 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use bushing_sim::{Scene, modulus, run};
+use bushing_sim::{Scene, modulus, run, xf_report};
 
 const USAGE: &str = "\
 usage:
   bushing-sim run SCENE.toml --out DIR     simulate a scene: DIR/trace.csv, DIR/*.svg
   bushing-sim maxwell-table [--out FILE]   complex-modulus error of every Maxwell form
+  bushing-sim xf-table [--out FILE]        saturation of the x_f cell forms against the step
   bushing-sim help";
 
 fn main() -> ExitCode {
@@ -37,6 +38,15 @@ fn dispatch(args: &[String]) -> Result<(), String> {
         }
         ["maxwell-table", "--out", file] => {
             std::fs::write(file, modulus::table()).map_err(|e| format!("{file}: {e}"))?;
+            println!("wrote {file}");
+            Ok(())
+        }
+        ["xf-table"] => {
+            print!("{}", xf_report::table());
+            Ok(())
+        }
+        ["xf-table", "--out", file] => {
+            std::fs::write(file, xf_report::table()).map_err(|e| format!("{file}: {e}"))?;
             println!("wrote {file}");
             Ok(())
         }

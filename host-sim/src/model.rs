@@ -1,10 +1,13 @@
 //! Run-time composition of a bushing from a scene: only the effects the
 //! scene lists are built; an absent effect is a `None` that is skipped.
 
+use bushing::iwan::{self, ClampCell, SliderCell};
 use bushing::maxwell::{self, MaxwellCell};
+use bushing::xf::{self, XfCell};
 use bushing::{
     Accumulator, Backbone, Bushing, BushingState, Compensated, Drive, Effect, EffectOutput,
-    MaxwellForm, MaxwellSpec, MonotoneSpline, ParamError, Plain, Polynomial, Real,
+    IwanCellSpec, MaxwellForm, MaxwellSpec, MonotoneSpline, ParamError, Plain, Polynomial, Real,
+    XfForm, XfSpec,
 };
 
 use crate::scene::{BackboneSpec, Effect as EffectDesc, Scene};
@@ -44,11 +47,6 @@ pub fn backbone<T: Real>(spec: &BackboneSpec) -> Result<AnyBackbone<T>, ParamErr
             AnyBackbone::Spline(Box::new(MonotoneSpline::new(x, force)?))
         }
     })
-}
-
-/// Checks a backbone spec by building it in `f64`.
-pub fn check_backbone(spec: &BackboneSpec) -> Result<(), ParamError> {
-    backbone::<f64>(spec).map(|_| ())
 }
 
 /// A Maxwell bank sized at run time; the scheme is the core's
@@ -133,8 +131,105 @@ impl<T: Real> Effect<T> for DynMaxwell<T> {
     }
 }
 
+/// A core slice kernel: advances cells `C` with one state word each.
+pub type Kernel<T, C> = fn(&[C], &mut [T], &Drive<T>) -> EffectOutput<T>;
+
+/// A bank of cells with one force-like state word each, sized at run
+/// time; the scheme is the core's slice kernel for that cell type.
+#[derive(Debug, Clone)]
+pub struct DynBank<T, C> {
+    cells: Vec<C>,
+    kernel: Kernel<T, C>,
+    rest: T,
+    fraction: f64,
+    dt: Option<f64>,
+}
+
+impl<T: Real, C> Effect<T> for DynBank<T, C> {
+    type State = Vec<T>;
+    type Report = EffectOutput<T>;
+
+    fn fraction(&self) -> f64 {
+        self.fraction
+    }
+    fn dt(&self) -> Option<f64> {
+        self.dt
+    }
+    fn rest(&self) -> Vec<T> {
+        vec![self.rest; self.cells.len()]
+    }
+    #[inline]
+    fn step(&self, state: &mut Vec<T>, drive: &Drive<T>) -> EffectOutput<T> {
+        (self.kernel)(&self.cells, state, drive)
+    }
+    fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
+        *report
+    }
+}
+
+/// Iwan bank, clamp form.
+pub type DynIwanClamp<T> = DynBank<T, ClampCell<T>>;
+/// Iwan bank, slider form.
+pub type DynIwanSliders<T> = DynBank<T, SliderCell<T>>;
+/// x_f bank.
+pub type DynXf<T> = DynBank<T, XfCell<T>>;
+
+fn iwan_clamp<T: Real>(specs: &[IwanCellSpec]) -> Result<DynIwanClamp<T>, ParamError> {
+    Ok(DynBank {
+        cells: specs
+            .iter()
+            .enumerate()
+            .map(|(i, s)| ClampCell::new(*s, i))
+            .collect::<Result<_, _>>()?,
+        kernel: iwan::step_clamp::<T>,
+        rest: T::ZERO,
+        fraction: specs.iter().map(|s| s.g).sum(),
+        dt: None,
+    })
+}
+
+fn iwan_sliders<T: Real>(
+    specs: &[IwanCellSpec],
+    k_ref: f64,
+    x0: T,
+) -> Result<DynIwanSliders<T>, ParamError> {
+    Ok(DynBank {
+        cells: specs
+            .iter()
+            .enumerate()
+            .map(|(i, s)| SliderCell::new(*s, k_ref, i))
+            .collect::<Result<_, _>>()?,
+        kernel: iwan::step_sliders::<T>,
+        rest: x0,
+        fraction: specs.iter().map(|s| s.g).sum(),
+        dt: None,
+    })
+}
+
+fn xf_bank<T: Real>(form: XfForm, specs: &[XfSpec], dt: f64) -> Result<DynXf<T>, ParamError> {
+    Ok(DynBank {
+        cells: specs
+            .iter()
+            .enumerate()
+            .map(|(i, s)| XfCell::new(*s, dt, i))
+            .collect::<Result<_, _>>()?,
+        kernel: match form {
+            XfForm::Midpoint => |c, s, d| xf::step_xf(XfForm::Midpoint, c, s, d),
+            XfForm::ExactRamp => |c, s, d| xf::step_xf(XfForm::ExactRamp, c, s, d),
+        },
+        rest: T::ZERO,
+        fraction: specs.iter().map(|s| s.g).sum(),
+        dt: Some(dt),
+    })
+}
+
 /// The effects a scene can name, each present or not.
-pub type SceneEffects<T> = (Option<DynMaxwell<T>>,);
+pub type SceneEffects<T> = (
+    Option<DynMaxwell<T>>,
+    Option<DynIwanClamp<T>>,
+    Option<DynIwanSliders<T>>,
+    Option<DynXf<T>>,
+);
 
 /// A bushing built from a scene.
 pub type SceneBushing<T> = Bushing<T, AnyBackbone<T>, SceneEffects<T>>;
@@ -144,7 +239,8 @@ pub type SceneState<T> = BushingState<T, <SceneEffects<T> as Effect<T>>::State>;
 
 /// Builds the bushing a scene describes, with only its effects.
 pub fn build<T: Real>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
-    let mut maxwell = None;
+    let x0 = T::from_f64(crate::profile::displacement(&scene.profile, 0.0));
+    let (mut maxwell, mut clamp, mut sliders, mut xf) = (None, None, None, None);
     for e in &scene.effects {
         match e {
             EffectDesc::Maxwell {
@@ -152,9 +248,20 @@ pub fn build<T: Real>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
                 compensated,
                 cells,
             } => maxwell = Some(DynMaxwell::new(*form, cells, scene.dt, *compensated)?),
+            EffectDesc::Iwan {
+                slider: false,
+                cells,
+                ..
+            } => clamp = Some(iwan_clamp(cells)?),
+            EffectDesc::Iwan {
+                slider: true,
+                k_ref,
+                cells,
+            } => sliders = Some(iwan_sliders(cells, *k_ref, x0)?),
+            EffectDesc::Xf { form, cells } => xf = Some(xf_bank(*form, cells, scene.dt)?),
         }
     }
-    Bushing::new(backbone(&scene.backbone)?, (maxwell,))
+    Bushing::new(backbone(&scene.backbone)?, (maxwell, clamp, sliders, xf))
 }
 
 /// Names of the effects present, in trace-column order.
@@ -163,9 +270,22 @@ pub fn effect_names(scene: &Scene) -> Vec<String> {
 }
 
 /// Per-effect forces and energies of one step, in trace-column order.
+///
+/// A scene lists at most one effect of each kind and the trace columns
+/// follow the scene's order, so outputs are matched by kind.
 pub fn effect_outputs<T: Real>(
+    scene: &Scene,
     report: &<SceneEffects<T> as Effect<T>>::Report,
 ) -> Vec<EffectOutput<T>> {
-    let (maxwell,) = report;
-    maxwell.iter().copied().collect()
+    let (maxwell, clamp, sliders, xf) = report;
+    scene
+        .effects
+        .iter()
+        .filter_map(|e| match e {
+            EffectDesc::Maxwell { .. } => *maxwell,
+            EffectDesc::Iwan { slider: false, .. } => *clamp,
+            EffectDesc::Iwan { slider: true, .. } => *sliders,
+            EffectDesc::Xf { .. } => *xf,
+        })
+        .collect()
 }

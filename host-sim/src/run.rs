@@ -127,7 +127,7 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path) -> Result<Summary, String> {
             ));
             match &o.effects {
                 Some(r) => {
-                    for e in model::effect_outputs::<T>(r) {
+                    for e in model::effect_outputs::<T>(scene, r) {
                         line.push_str(&format!(",{:e}", e.force.to_f64()));
                     }
                 }

@@ -10,7 +10,7 @@ use std::fmt;
 use std::ops::Range;
 use std::path::Path;
 
-use bushing::{MaxwellForm, MaxwellSpec, ParamError};
+use bushing::{Backbone, IwanCellSpec, MaxwellForm, MaxwellSpec, ParamError, XfForm, XfSpec};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -99,6 +99,50 @@ pub enum EffectSpec {
         /// The cells.
         cells: Vec<CellSpec>,
     },
+    /// A bank of Jenkins cells (Iwan).
+    Iwan {
+        /// "clamp" (force saturation, eq 1.32) or "slider" (eq 1.30).
+        form: String,
+        /// Reference stiffness in N/mm that turns slip distances into slip
+        /// forces (and the slider springs); default: backbone tangent at 0.
+        #[serde(default)]
+        k_ref: Option<f64>,
+        /// The cells.
+        cells: Vec<IwanCellToml>,
+    },
+    /// A bank of nonlinear viscous x_f cells (eq 1.52).
+    Xf {
+        /// "midpoint" (eq 2.41) or "exact-ramp".
+        form: String,
+        /// The cells.
+        cells: Vec<XfCellToml>,
+    },
+}
+
+/// One Jenkins cell: a fraction and either a slip force or a slip distance.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IwanCellToml {
+    /// Load fraction g.
+    pub g: f64,
+    /// Slip force in N.
+    #[serde(default)]
+    pub slip_force: Option<f64>,
+    /// Slip distance from rest in mm (slip force g k_ref x_f).
+    #[serde(default)]
+    pub x_f: Option<f64>,
+}
+
+/// One x_f cell.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct XfCellToml {
+    /// Viscous relaxation frequency in Hz (0 for rate independence).
+    pub f_hz: f64,
+    /// Load fraction g.
+    pub g: f64,
+    /// Hysteretic relaxation distance in mm.
+    pub x_f: f64,
 }
 
 fn default_state() -> String {
@@ -110,6 +154,8 @@ impl EffectSpec {
     pub fn kind(&self) -> &'static str {
         match self {
             Self::Maxwell { .. } => "maxwell",
+            Self::Iwan { .. } => "iwan",
+            Self::Xf { .. } => "xf",
         }
     }
 }
@@ -227,6 +273,22 @@ pub enum Effect {
         /// Cells (ω in rad/s).
         cells: Vec<MaxwellSpec>,
     },
+    /// An Iwan bank.
+    Iwan {
+        /// Slider form (else clamp form).
+        slider: bool,
+        /// Reference stiffness (N/mm).
+        k_ref: f64,
+        /// Cells.
+        cells: Vec<IwanCellSpec>,
+    },
+    /// An x_f bank.
+    Xf {
+        /// Form.
+        form: XfForm,
+        /// Cells (ω in rad/s).
+        cells: Vec<XfSpec>,
+    },
 }
 
 impl Effect {
@@ -236,6 +298,20 @@ impl Effect {
             Self::Maxwell { form, cells, .. } => {
                 format!("maxwell {} x{}", form.name(), cells.len())
             }
+            Self::Iwan { slider, cells, .. } => {
+                let form = if *slider { "slider" } else { "clamp" };
+                format!("iwan {form} x{}", cells.len())
+            }
+            Self::Xf { form, cells } => format!("xf {} x{}", form.name(), cells.len()),
+        }
+    }
+
+    /// Sum of the load fractions of the effect's cells.
+    pub fn fraction(&self) -> f64 {
+        match self {
+            Self::Maxwell { cells, .. } => cells.iter().map(|c| c.g).sum(),
+            Self::Iwan { cells, .. } => cells.iter().map(|c| c.g).sum(),
+            Self::Xf { cells, .. } => cells.iter().map(|c| c.g).sum(),
         }
     }
 }
@@ -279,8 +355,11 @@ impl Scene {
 
         let bb_span = raw.backbone.span();
         let backbone = raw.backbone.into_inner();
-        crate::model::check_backbone(&backbone)
-            .map_err(|e| err(Some(bb_span.clone()), format!("backbone: {e}")))?;
+        // The reference stiffness of Iwan cells given by slip distance.
+        let k_at_rest = crate::model::backbone::<f64>(&backbone)
+            .map_err(|e| err(Some(bb_span.clone()), format!("backbone: {e}")))?
+            .eval(0.0)
+            .1;
 
         let mut effects = Vec::new();
         let mut seen = Vec::new();
@@ -297,16 +376,11 @@ impl Scene {
                 ));
             }
             seen.push(kind);
-            let effect = validate_effect(spec, dt)
+            let effect = validate_effect(spec, dt, k_at_rest)
                 .map_err(|m| err(Some(span.clone()), format!("effects[{i}] ({kind}): {m}")))?;
             effects.push(effect);
         }
-        let sum: f64 = effects
-            .iter()
-            .map(|e| match e {
-                Effect::Maxwell { cells, .. } => cells.iter().map(|c| c.g).sum::<f64>(),
-            })
-            .sum();
+        let sum: f64 = effects.iter().map(Effect::fraction).sum();
         if sum > 1.0 + 1e-12 {
             return Err(err(None, ParamError::FractionsAboveOne { sum }.to_string()));
         }
@@ -337,7 +411,7 @@ impl Scene {
     }
 }
 
-fn validate_effect(spec: EffectSpec, dt: f64) -> Result<Effect, String> {
+fn validate_effect(spec: EffectSpec, dt: f64, k_at_rest: f64) -> Result<Effect, String> {
     match spec {
         EffectSpec::Maxwell { form, state, cells } => {
             let form = MaxwellForm::from_name(&form).ok_or_else(|| {
@@ -349,12 +423,7 @@ fn validate_effect(spec: EffectSpec, dt: f64) -> Result<Effect, String> {
                 "compensated" => true,
                 other => return Err(format!("state '{other}' is not one of plain, compensated")),
             };
-            if cells.is_empty() || cells.len() > MAX_CELLS {
-                return Err(format!(
-                    "1 to {MAX_CELLS} cells expected, got {}",
-                    cells.len()
-                ));
-            }
+            check_count(cells.len())?;
             for (i, c) in cells.iter().enumerate() {
                 if !(c.f_hz.is_finite() && c.f_hz > 0.0) {
                     return Err(format!(
@@ -379,9 +448,60 @@ fn validate_effect(spec: EffectSpec, dt: f64) -> Result<Effect, String> {
                 cells,
             })
         }
+        EffectSpec::Iwan { form, k_ref, cells } => {
+            let slider = match form.as_str() {
+                "clamp" => false,
+                "slider" => true,
+                other => return Err(format!("form '{other}' is not one of clamp, slider")),
+            };
+            let k_ref = k_ref.unwrap_or(k_at_rest);
+            if !(k_ref.is_finite() && k_ref > 0.0) {
+                return Err(format!("k_ref must be finite and > 0 N/mm, got {k_ref}"));
+            }
+            check_count(cells.len())?;
+            let cells = cells
+                .iter()
+                .enumerate()
+                .map(|(i, c)| match (c.slip_force, c.x_f) {
+                    (Some(f), None) => Ok(IwanCellSpec::new(c.g, f)),
+                    (None, Some(x_f)) => Ok(IwanCellSpec::from_slip_distance(c.g, k_ref, x_f)),
+                    _ => Err(format!(
+                        "cells[{i}]: give exactly one of slip_force (N) and x_f (mm)"
+                    )),
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            for (i, c) in cells.iter().enumerate() {
+                bushing::iwan::SliderCell::<f64>::new(*c, k_ref, i).map_err(|e| e.to_string())?;
+            }
+            Ok(Effect::Iwan {
+                slider,
+                k_ref,
+                cells,
+            })
+        }
+        EffectSpec::Xf { form, cells } => {
+            let form = XfForm::from_name(&form)
+                .ok_or_else(|| format!("form '{form}' is not one of midpoint, exact-ramp"))?;
+            check_count(cells.len())?;
+            let cells: Vec<XfSpec> = cells
+                .iter()
+                .map(|c| XfSpec::hz(c.f_hz, c.g, c.x_f))
+                .collect();
+            for (i, c) in cells.iter().enumerate() {
+                bushing::xf::XfCell::<f64>::new(*c, dt, i).map_err(|e| e.to_string())?;
+            }
+            Ok(Effect::Xf { form, cells })
+        }
     }
 }
 
+fn check_count(n: usize) -> Result<(), String> {
+    if n == 0 || n > MAX_CELLS {
+        Err(format!("1 to {MAX_CELLS} cells expected, got {n}"))
+    } else {
+        Ok(())
+    }
+}
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -465,6 +585,77 @@ cycles = 3
         let e = Scene::parse("s.toml", &bad).unwrap_err();
         assert!(e.message.starts_with("backbone: backbone tangent"), "{e}");
         assert_eq!(e.at.map(|l| l.line), Some(6), "{e}");
+    }
+
+    #[test]
+    fn iwan_cells_take_a_slip_force_or_a_distance_on_k_ref() {
+        let iwan = GOOD.replace(
+            "[profile]",
+            "[[effects]]\ntype = \"iwan\"\nform = \"clamp\"\ncells = [{ g = 0.1, x_f = 0.5 }, { g = 0.2, slip_force = 7.0 }]\n[profile]",
+        );
+        let s = Scene::parse("s.toml", &iwan).unwrap();
+        match &s.effects[1] {
+            Effect::Iwan {
+                slider,
+                k_ref,
+                cells,
+            } => {
+                assert!(!slider);
+                assert_eq!(*k_ref, 100.0); // backbone tangent at 0
+                assert_eq!(cells[0], IwanCellSpec::new(0.1, 0.1 * 100.0 * 0.5));
+                assert_eq!(cells[1], IwanCellSpec::new(0.2, 7.0));
+            }
+            other => panic!("{other:?}"),
+        }
+        let both = iwan.replace(
+            "{ g = 0.1, x_f = 0.5 }",
+            "{ g = 0.1, x_f = 0.5, slip_force = 1.0 }",
+        );
+        let e = Scene::parse("s.toml", &both).unwrap_err();
+        assert!(
+            e.message
+                .contains("cells[0]: give exactly one of slip_force"),
+            "{e}"
+        );
+        let bad_form = iwan.replace("form = \"clamp\"", "form = \"stick\"");
+        assert!(
+            Scene::parse("s.toml", &bad_form)
+                .unwrap_err()
+                .message
+                .contains("not one of clamp, slider")
+        );
+        let too_much = iwan.replace("g = 0.2, slip_force", "g = 0.75, slip_force");
+        assert!(
+            Scene::parse("s.toml", &too_much)
+                .unwrap_err()
+                .message
+                .contains("above 1")
+        );
+    }
+
+    #[test]
+    fn xf_cells_are_checked() {
+        let xf = GOOD.replace(
+            "[profile]",
+            "[[effects]]\ntype = \"xf\"\nform = \"exact-ramp\"\ncells = [{ f_hz = 0.0, g = 0.1, x_f = 0.02 }]\n[profile]",
+        );
+        let s = Scene::parse("s.toml", &xf).unwrap();
+        assert_eq!(s.effects[1].name(), "xf exact-ramp x1");
+        let bad = xf.replace("x_f = 0.02", "x_f = -0.02");
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
+        assert!(
+            e.message.contains("effects[1] (xf): x_f[0] must be > 0"),
+            "{e}"
+        );
+        let twice = GOOD.replace(
+            "[profile]",
+            "[[effects]]\ntype = \"maxwell\"\nform = \"rate-midpoint\"\ncells = [{ f_hz = 3.0, g = 0.1 }]\n[profile]",
+        );
+        let e = Scene::parse("s.toml", &twice).unwrap_err();
+        assert!(
+            e.message.contains("effects[1]: a second 'maxwell' effect"),
+            "{e}"
+        );
     }
 
     #[test]

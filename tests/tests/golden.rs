@@ -14,3 +14,14 @@ fn golden_trace_hash_is_the_committed_one() {
         "kernel output changed; if deliberate, set GOLDEN_HASH = {h:#018x}"
     );
 }
+
+#[test]
+fn hysteresis_golden_trace_hash_is_the_committed_one() {
+    let h = bushing_tests::golden_trace_hysteresis().expect("golden trace runs");
+    println!("hysteresis golden trace hash: {h:#018x}");
+    assert_eq!(
+        h,
+        bushing_tests::GOLDEN_HYSTERESIS_HASH,
+        "kernel output changed; if deliberate, set GOLDEN_HYSTERESIS_HASH = {h:#018x}"
+    );
+}

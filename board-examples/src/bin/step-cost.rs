@@ -8,7 +8,11 @@
 #[cfg(target_os = "none")]
 mod firmware {
     use bushing::MaxwellForm;
-    use bushing_boards::{maxwell4, maxwell4_compensated, polynomial, run, spline, triangle};
+    use bushing::XfForm;
+    use bushing_boards::{
+        composite, iwan4, maxwell4, maxwell4_compensated, polynomial, run, sliders4, spline,
+        triangle, xf2,
+    };
     use cortex_m::peripheral::{SYST, syst::SystClkSource};
     use cortex_m_rt::entry;
     use cortex_m_semihosting::{debug, hprintln};
@@ -90,6 +94,28 @@ mod firmware {
         };
         let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
         report("rate-exact-ramp, compensated state", t);
+        let Ok(b) = iwan4() else { fail() };
+        let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+        report("iwan clamp, 4 Jenkins cells", t);
+        let t = per_step(&mut syst, baseline, || run(&b, &xs, all));
+        report("  + tangent and dissipated energy", t);
+        let Ok(b) = sliders4() else { fail() };
+        let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+        report("iwan slider, 4 Jenkins cells", t);
+        for form in XfForm::ALL {
+            let Ok(b) = xf2(form) else { fail() };
+            let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+            let name = match form {
+                XfForm::Midpoint => "x_f midpoint (2.41), 2 cells",
+                XfForm::ExactRamp => "x_f exact ramp, 2 cells",
+            };
+            report(name, t);
+            let t = per_step(&mut syst, baseline, || run(&b, &xs, all));
+            report("  + tangent and dissipated energy", t);
+        }
+        let Ok(b) = composite() else { fail() };
+        let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+        report("3 Maxwell + 3 Jenkins + 1 x_f", t);
         debug::exit(debug::EXIT_SUCCESS);
         loop {
             cortex_m::asm::nop();

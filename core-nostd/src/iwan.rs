@@ -1,0 +1,519 @@
+//! Iwan banks: parallel Jenkins cells (spring in series with a Coulomb
+//! slider), seed 000 §1.4.2 and seed 004 §2.3.
+//!
+//! Two forms, one per reading of the thesis:
+//!
+//! - [`IwanBank`], **force saturation (clamp)**, eq 1.32 with the backbone
+//!   coupling of eq 1.35: a sticking cell takes the fraction g_i of every
+//!   backbone increment, `Ḟ^i = g_i Ḟ^∞`, and a cell whose force reaches its
+//!   slip force `F_f^i` stays there while the motion continues:
+//!
+//!   ```text
+//!   F_tr = F^i_{n-1} + g_i ΔF^∞_n,    F^i_n = clamp(F_tr, -F_f^i, F_f^i)
+//!   ```
+//!
+//!   Each cell is a stop operator applied to the monotone input F^∞(x), so
+//!   the bank has return-point memory in x exactly (Madelung's rules), with
+//!   no stored turning point: the cell forces are the memory.
+//! - [`IwanSliders`], **slider (displacement)**, eqs 1.30-1.31: each cell
+//!   has a linear spring `k_i = g_i K_ref` and a slider position x^i that
+//!   moves only to keep `|x - x^i| <= x_f^i = F_f^i / k_i`:
+//!
+//!   ```text
+//!   F^i = k_i (x - x^i)
+//!   ```
+//!
+//!   With a linear backbone `F^∞ = K_ref x` both forms give the same force.
+//!   With a nonlinear backbone they differ (the thesis's Fig. 1.16
+//!   discussion): here the breakpoints stay at fixed distances in x.
+//!
+//! A cell is described by its fraction g_i and its slip force F_f^i (N), or
+//! by its slip distance from rest x_f^i = F_f^i / (g_i K_ref)
+//! ([`IwanCellSpec::from_slip_distance`]). That is the *virgin* breakpoint
+//! (eq 1.34); after a reversal from sliding the cell sticks over 2 x_f^i (the
+//! Masing factor 2).
+//!
+//! - **States**: one force (clamp) or one slider position (slider) per cell;
+//!   the bushing keeps the shared F^∞_{n-1} and x_{n-1}.
+//! - **Stability**: both updates are exact for the piecewise-linear input
+//!   between samples, rate independent and unconditionally stable; there is
+//!   no sign(ẋ) test, so noise around a turning point cannot make them
+//!   chatter.
+//! - **Dissipation**: slip force times slider travel, `F_f^i |F_tr - F^i_n| /
+//!   (g_i K^∞)` in the clamp form (exact for a linear backbone),
+//!   `F_f^i |Δx^i|` in the slider form; never negative.
+//! - **Cost**: per cell one multiply-add, two compares (clamp) and, with the
+//!   energy, one multiply-add more; one division per bank by K^∞ for the
+//!   energy of the clamp form, dropped when the caller does not read it.
+
+use crate::bushing::{Drive, Effect, EffectOutput};
+use crate::error::{Param, ParamError, positive};
+use crate::real::Real;
+
+/// One Jenkins cell: load fraction and slip force.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IwanCellSpec {
+    /// Fraction g_i of the high-frequency backbone carried while sticking.
+    pub g: f64,
+    /// Slip force F_f^i (N), the largest force the cell carries.
+    pub slip_force: f64,
+}
+
+impl IwanCellSpec {
+    /// A cell with fraction `g` and slip force `slip_force`.
+    pub const fn new(g: f64, slip_force: f64) -> Self {
+        Self { g, slip_force }
+    }
+
+    /// A cell that starts sliding after `x_f` of virgin loading on a
+    /// backbone of reference stiffness `k_ref`: F_f = g k_ref x_f.
+    pub fn from_slip_distance(g: f64, k_ref: f64, x_f: f64) -> Self {
+        Self::new(g, g * k_ref * x_f)
+    }
+
+    fn check(&self, i: usize) -> Result<(f64, f64), ParamError> {
+        let g = positive(Param::item("g", i), self.g)?;
+        if g > 1.0 {
+            return Err(ParamError::FractionsAboveOne { sum: g });
+        }
+        let f = positive(Param::item("slip_force", i), self.slip_force)?;
+        Ok((g, f))
+    }
+}
+
+fn fraction_sum(specs: &[IwanCellSpec]) -> Result<f64, ParamError> {
+    let mut sum = 0.0;
+    for (i, s) in specs.iter().enumerate() {
+        sum += s.check(i)?.0;
+    }
+    if sum > 1.0 + 1e-12 {
+        return Err(ParamError::FractionsAboveOne { sum });
+    }
+    Ok(sum)
+}
+
+/// `v` limited to `[lo, hi]` with plain compares: the inputs are finite
+/// (the bushing refuses others), so the NaN rules of `f32::max`/`min`,
+/// which cost extra branches on cores without `vmaxnm`, are not needed.
+#[inline(always)]
+fn clamp<T: Real>(v: T, lo: T, hi: T) -> T {
+    if v > hi {
+        hi
+    } else if v < lo {
+        lo
+    } else {
+        v
+    }
+}
+
+/// Coefficients of one clamp-form cell.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ClampCell<T> {
+    g: T,
+    limit: T,
+    /// F_f / g, for the energy.
+    energy: T,
+}
+
+impl<T: Real> ClampCell<T> {
+    /// Coefficients of cell `index`.
+    pub fn new(spec: IwanCellSpec, index: usize) -> Result<Self, ParamError> {
+        let (g, f) = spec.check(index)?;
+        Ok(Self {
+            g: T::from_f64(g),
+            limit: T::from_f64(f),
+            energy: T::from_f64(f / g),
+        })
+    }
+}
+
+/// Advances clamp-form cells by one step (the one implementation, used by
+/// [`IwanBank`] and by run-time sized banks). `forces` holds each cell's
+/// force.
+#[inline(always)]
+pub fn step_clamp<T: Real>(
+    cells: &[ClampCell<T>],
+    forces: &mut [T],
+    drive: &Drive<T>,
+) -> EffectOutput<T> {
+    let mut force = T::ZERO;
+    let mut sticking = T::ZERO;
+    let mut slip = T::ZERO;
+    for (c, f) in cells.iter().zip(forces.iter_mut()) {
+        let trial = *f + c.g * drive.df_inf;
+        let new = clamp(trial, -c.limit, c.limit);
+        if new == trial {
+            sticking += c.g;
+        }
+        slip += c.energy * (trial - new).abs();
+        *f = new;
+        force += new;
+    }
+    EffectOutput {
+        force,
+        tangent: sticking * drive.k_inf,
+        dissipated: slip / drive.k_inf,
+    }
+}
+
+/// A bank of `N` Jenkins cells in the force-saturation (clamp) form, eqs 1.32
+/// and 1.35 (see the module docs for equations, limits and cost).
+#[derive(Debug, Clone, PartialEq)]
+pub struct IwanBank<T, const N: usize> {
+    cells: [ClampCell<T>; N],
+    fraction: f64,
+}
+
+impl<T: Real, const N: usize> IwanBank<T, N> {
+    /// Builds the bank.
+    pub fn new(specs: &[IwanCellSpec; N]) -> Result<Self, ParamError> {
+        let fraction = fraction_sum(specs)?;
+        let mut cells = [ClampCell::default(); N];
+        for (i, (c, s)) in cells.iter_mut().zip(specs).enumerate() {
+            *c = ClampCell::new(*s, i)?;
+        }
+        Ok(Self { cells, fraction })
+    }
+}
+
+impl<T: Real, const N: usize> Effect<T> for IwanBank<T, N> {
+    type State = [T; N];
+    type Report = EffectOutput<T>;
+
+    fn fraction(&self) -> f64 {
+        self.fraction
+    }
+    fn dt(&self) -> Option<f64> {
+        None
+    }
+    fn rest(&self) -> [T; N] {
+        [T::ZERO; N]
+    }
+    #[inline(always)]
+    fn step(&self, state: &mut [T; N], drive: &Drive<T>) -> EffectOutput<T> {
+        step_clamp(&self.cells, state, drive)
+    }
+    #[inline(always)]
+    fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
+        *report
+    }
+}
+
+/// Coefficients of one slider-form cell.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SliderCell<T> {
+    k: T,
+    reach: T,
+    slip_force: T,
+}
+
+impl<T: Real> SliderCell<T> {
+    /// Coefficients of cell `index` on a reference stiffness `k_ref`.
+    pub fn new(spec: IwanCellSpec, k_ref: f64, index: usize) -> Result<Self, ParamError> {
+        let (g, f) = spec.check(index)?;
+        let k = g * positive(Param::scalar("k_ref"), k_ref)?;
+        Ok(Self {
+            k: T::from_f64(k),
+            reach: T::from_f64(f / k),
+            slip_force: T::from_f64(f),
+        })
+    }
+}
+
+/// Advances slider-form cells by one step; `sliders` holds the positions
+/// x^i (the one implementation, as [`step_clamp`]).
+#[inline(always)]
+pub fn step_sliders<T: Real>(
+    cells: &[SliderCell<T>],
+    sliders: &mut [T],
+    drive: &Drive<T>,
+) -> EffectOutput<T> {
+    let x = drive.x;
+    let mut force = T::ZERO;
+    let mut sticking = T::ZERO;
+    let mut work = T::ZERO;
+    for (c, s) in cells.iter().zip(sliders.iter_mut()) {
+        let new = clamp(*s, x - c.reach, x + c.reach);
+        if new == *s {
+            sticking += c.k;
+        }
+        work += c.slip_force * (new - *s).abs();
+        *s = new;
+        force += c.k * (x - new);
+    }
+    EffectOutput {
+        force,
+        tangent: sticking,
+        dissipated: work,
+    }
+}
+
+/// A bank of `N` Jenkins cells in the slider (displacement) form, eqs
+/// 1.30-1.31 (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct IwanSliders<T, const N: usize> {
+    cells: [SliderCell<T>; N],
+    fraction: f64,
+}
+
+impl<T: Real, const N: usize> IwanSliders<T, N> {
+    /// Builds the bank with springs `g_i k_ref`.
+    pub fn new(specs: &[IwanCellSpec; N], k_ref: f64) -> Result<Self, ParamError> {
+        let fraction = fraction_sum(specs)?;
+        let mut cells = [SliderCell::default(); N];
+        for (i, (c, s)) in cells.iter_mut().zip(specs).enumerate() {
+            *c = SliderCell::new(*s, k_ref, i)?;
+        }
+        Ok(Self { cells, fraction })
+    }
+
+    /// A relaxed state at displacement `x0` (every spring unloaded).
+    pub fn rest_at(&self, x0: T) -> [T; N] {
+        [x0; N]
+    }
+}
+
+impl<T: Real, const N: usize> Effect<T> for IwanSliders<T, N> {
+    type State = [T; N];
+    type Report = EffectOutput<T>;
+
+    fn fraction(&self) -> f64 {
+        self.fraction
+    }
+    fn dt(&self) -> Option<f64> {
+        None
+    }
+    /// Sliders at x = 0; use [`IwanSliders::rest_at`] to start elsewhere.
+    fn rest(&self) -> [T; N] {
+        [T::ZERO; N]
+    }
+    #[inline(always)]
+    fn step(&self, state: &mut [T; N], drive: &Drive<T>) -> EffectOutput<T> {
+        step_sliders(&self.cells, state, drive)
+    }
+    #[inline(always)]
+    fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
+        *report
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::backbone::{Backbone, Polynomial};
+    use crate::bushing::Bushing;
+    use alloc::vec;
+    use alloc::vec::Vec;
+    use proptest::prelude::*;
+
+    /// The reference Iwan of seed 004 §4.1 as slip forces on a unit stick
+    /// stiffness split in 20 cells: phi_i = 0.2 + 1.8 (i-1)/19.
+    fn reference_cells() -> [IwanCellSpec; 20] {
+        core::array::from_fn(|i| {
+            let phi = 0.2 + 1.8 * i as f64 / 19.0;
+            IwanCellSpec::from_slip_distance(0.05 / 6.0, 6.0, phi)
+        })
+    }
+
+    /// Total stick stiffness 1 out of K^inf = 6 (the parallel spring is 5).
+    fn reference_bushing() -> Bushing<f64, Polynomial<f64, 2>, (IwanBank<f64, 20>,)> {
+        Bushing::new(
+            Polynomial::linear(6.0).unwrap(),
+            (IwanBank::new(&reference_cells()).unwrap(),),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn steady_cycle_dissipation_matches_the_masing_sum() {
+        // D = sum_{phi_i < p_m} 4 f_i (p_m - phi_i), with f_i = 0.05 phi_i.
+        let b = reference_bushing();
+        for p_m in [0.1, 0.3, 0.5, 1.0, 1.5, 2.0, 3.0, 5.0, 10.0] {
+            let mut s = b.state_at(0.0);
+            let n = 2000;
+            let mut cycle = 0.0;
+            for k in 0..3 * n {
+                let x = p_m
+                    * libm::sin(
+                        core::f64::consts::TAU * k as f64 / n as f64 + 0.5 * core::f64::consts::PI,
+                    );
+                let out = b.step(&mut s, x);
+                assert!(out.dissipated >= 0.0);
+                if k >= 2 * n {
+                    cycle += out.dissipated;
+                }
+            }
+            let exact: f64 = (0..20)
+                .map(|i| 0.2 + 1.8 * i as f64 / 19.0)
+                .filter(|&phi| phi < p_m)
+                .map(|phi| 4.0 * 0.05 * phi * (p_m - phi))
+                .sum();
+            if exact == 0.0 {
+                assert_eq!(cycle, 0.0, "p_m = {p_m}");
+            } else {
+                assert!(
+                    (cycle / exact - 1.0).abs() < 1e-9,
+                    "p_m = {p_m}: {cycle} vs {exact}"
+                );
+            }
+        }
+        // Seed 004 §4.1 tabulates D(1.0) = 0.33108 J and D(2.0) = 2.7663 J.
+        let d1: f64 = (0..20)
+            .map(|i| 0.2 + 1.8 * i as f64 / 19.0)
+            .filter(|&p| p < 1.0)
+            .map(|p| 0.2 * p * (1.0 - p))
+            .sum();
+        assert!((d1 - 0.33108).abs() < 1e-5);
+    }
+
+    #[test]
+    fn slider_and_clamp_forms_agree_on_a_linear_backbone() {
+        let specs = [
+            IwanCellSpec::new(0.1, 3.0),
+            IwanCellSpec::new(0.2, 12.0),
+            IwanCellSpec::new(0.15, 40.0),
+        ];
+        let bb = || Polynomial::<f64, 2>::linear(100.0).unwrap();
+        let a = Bushing::new(bb(), (IwanBank::new(&specs).unwrap(),)).unwrap();
+        let b = Bushing::new(bb(), (IwanSliders::new(&specs, 100.0).unwrap(),)).unwrap();
+        let (mut sa, mut sb) = (a.state_at(0.0), b.state_at(0.0));
+        for k in 0..5000 {
+            let t = k as f64 * 1e-3;
+            let x = 4.0 * libm::sin(3.0 * t) * libm::cos(0.7 * t);
+            let (oa, ob) = (a.step(&mut sa, x), b.step(&mut sb, x));
+            assert!((oa.force - ob.force).abs() < 1e-9 * (1.0 + oa.force.abs()));
+            assert!((oa.tangent - ob.tangent).abs() < 1e-9);
+            assert!((oa.dissipated - ob.dissipated).abs() < 1e-9 * (1.0 + oa.dissipated));
+        }
+    }
+
+    #[test]
+    fn first_loading_breaks_at_x_f_and_reversal_at_twice_x_f() {
+        let spec = [IwanCellSpec::from_slip_distance(0.5, 10.0, 0.2)]; // F_f = 1
+        let b = Bushing::new(
+            Polynomial::<f64, 2>::linear(10.0).unwrap(),
+            (IwanBank::new(&spec).unwrap(),),
+        )
+        .unwrap();
+        let mut s = b.state_at(0.0);
+        let k0 = b.step(&mut s, 0.1).tangent;
+        assert_eq!(k0, 10.0); // g0 K + g K, sticking
+        assert_eq!(b.step(&mut s, 0.3).tangent, 5.0); // sliding past x_f = 0.2
+        // Reverse from 0.3: sticks until 0.3 - 2 x_f = -0.1.
+        assert_eq!(b.step(&mut s, 0.0).tangent, 10.0);
+        assert_eq!(b.step(&mut s, -0.2).tangent, 5.0);
+    }
+
+    #[test]
+    fn parameter_errors() {
+        assert_eq!(
+            IwanBank::<f64, 2>::new(&[IwanCellSpec::new(0.1, 1.0), IwanCellSpec::new(0.1, 0.0)]),
+            Err(ParamError::NotPositive {
+                param: Param::item("slip_force", 1),
+                value: 0.0
+            })
+        );
+        assert_eq!(
+            IwanBank::<f64, 2>::new(&[IwanCellSpec::new(0.7, 1.0), IwanCellSpec::new(0.7, 1.0)]),
+            Err(ParamError::FractionsAboveOne { sum: 1.4 })
+        );
+        assert!(matches!(
+            IwanSliders::<f64, 1>::new(&[IwanCellSpec::new(0.1, 1.0)], -1.0),
+            Err(ParamError::NotPositive { .. })
+        ));
+    }
+
+    /// A path through turning points, sampled with steps of at most `h`.
+    fn walk(points: &[f64], h: f64, mut visit: impl FnMut(f64, bool)) {
+        let mut x = 0.0;
+        for &p in points {
+            let n = ((p - x).abs() / h).ceil().max(1.0) as usize;
+            for k in 1..=n {
+                let v = if k == n {
+                    p
+                } else {
+                    x + (p - x) * k as f64 / n as f64
+                };
+                visit(v, k == n);
+            }
+            x = p;
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        /// Madelung: from turning point A to B, any inner loops strictly
+        /// between them, then back to A: the force at A is the force it had.
+        #[test]
+        fn madelung_return_point_memory_clamp_form(
+            a in -3.0f64..3.0,
+            reach in 0.01f64..0.99,
+            down in any::<bool>(),
+            inner in prop::collection::vec(0.01f64..0.99, 0..12),
+            h in 0.002f64..0.2,
+            c3 in 0.0f64..3.0,
+        ) {
+            // B inside the current loop: between A and the reversal before it
+            // (beyond it, rule 3 wipes A's loop and rule 2 no longer applies).
+            let previous = if down { -4.0 } else { 4.5 };
+            let b_pt = a + (previous - a) * reach;
+            let specs = [
+                IwanCellSpec::new(0.1, 2.0),
+                IwanCellSpec::new(0.2, 10.0),
+                IwanCellSpec::new(0.15, 35.0),
+                IwanCellSpec::new(0.05, 60.0),
+            ];
+            // A hardening backbone: the coupling is through F^inf(x).
+            let bb = Polynomial::<f64, 4>::new(&[0.0, 50.0, 0.0, c3], (-10.0, 10.0)).unwrap();
+            let bush = Bushing::new(bb, (IwanBank::new(&specs).unwrap(),)).unwrap();
+            let mut s = bush.state_at(0.0);
+            // Arrive at A moving away from B, so that A is a turning point.
+            let mut path = if down { vec![4.5, -4.0, a, b_pt] } else { vec![-4.0, 4.5, a, b_pt] };
+            path.extend(inner.iter().map(|u| a + (b_pt - a) * u));
+            path.push(a);
+            let mut forces_at_a = Vec::new();
+            let mut turns = 0;
+            walk(&path, h, |x, at_turn| {
+                let f = bush.step(&mut s, x).force;
+                if at_turn {
+                    turns += 1;
+                    if turns == 3 || turns == path.len() {
+                        forces_at_a.push(f);
+                    }
+                }
+            });
+            let (first, last) = (forces_at_a[0], forces_at_a[1]);
+            prop_assert!((first - last).abs() <= 1e-9 * first.abs().max(1.0), "{} vs {}", first, last);
+            prop_assert!(turns == path.len());
+        }
+    }
+
+    #[test]
+    fn the_backbone_is_shared_not_reevaluated() {
+        // The clamp form only sees F^inf through the drive: a bank stepped
+        // with a hand-made drive equals the bushing's effect output.
+        let specs = [IwanCellSpec::new(0.3, 5.0)];
+        let bank = IwanBank::<f64, 1>::new(&specs).unwrap();
+        let bb = Polynomial::<f64, 4>::new(&[0.0, 50.0, 0.0, 1.0], (-10.0, 10.0)).unwrap();
+        let bush = Bushing::new(bb, (bank.clone(),)).unwrap();
+        let mut s = bush.state_at(0.0);
+        let mut f = bank.rest();
+        let mut prev = bb.eval(0.0).0;
+        for k in 1..100 {
+            let x = 0.05 * k as f64;
+            let (fi, ki) = bb.eval(x);
+            let d = Drive {
+                x,
+                dx: 0.05,
+                f_inf: fi,
+                df_inf: fi - prev,
+                k_inf: ki,
+            };
+            let own = bank.step(&mut f, &d);
+            let via = bush.step(&mut s, x).effects.unwrap().0;
+            assert_eq!(own, via);
+            prev = fi;
+        }
+    }
+}
