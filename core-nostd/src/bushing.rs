@@ -79,8 +79,8 @@ pub trait Effect<T: Real> {
     fn check_dt(&self, dt: Option<f64>) -> Result<Option<f64>, ParamError> {
         same_dt(dt, self.dt())
     }
-    /// The relaxed state (no force in any branch).
-    fn rest(&self) -> Self::State;
+    /// The relaxed state at displacement `x0`: no force in any branch.
+    fn rest(&self, x0: T) -> Self::State;
     /// Advances the state by one step.
     fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> Self::Report;
     /// Sum of the branch outputs of a report.
@@ -96,7 +96,7 @@ impl<T: Real> Effect<T> for () {
     fn dt(&self) -> Option<f64> {
         None
     }
-    fn rest(&self) {}
+    fn rest(&self, _: T) {}
     #[inline(always)]
     fn step(&self, _: &mut (), _: &Drive<T>) {}
     #[inline(always)]
@@ -119,8 +119,8 @@ impl<T: Real, E: Effect<T>> Effect<T> for Option<E> {
     fn check_dt(&self, dt: Option<f64>) -> Result<Option<f64>, ParamError> {
         self.as_ref().map_or(Ok(dt), |e| e.check_dt(dt))
     }
-    fn rest(&self) -> Self::State {
-        self.as_ref().map(E::rest)
+    fn rest(&self, x0: T) -> Self::State {
+        self.as_ref().map(|e| e.rest(x0))
     }
     #[inline(always)]
     fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> Self::Report {
@@ -158,8 +158,8 @@ macro_rules! tuple_effect {
                 $( dt = self.$idx.check_dt(dt)?; )+
                 Ok(dt)
             }
-            fn rest(&self) -> Self::State {
-                ($(self.$idx.rest(),)+)
+            fn rest(&self, x0: T) -> Self::State {
+                ($(self.$idx.rest(x0),)+)
             }
             #[inline(always)]
             fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> Self::Report {
@@ -305,7 +305,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
             f_inf: f,
             force: self.g0 * f,
             tangent: self.g0 * k,
-            effects: self.effects.rest(),
+            effects: self.effects.rest(x),
             faults,
             rejected: 0,
         }

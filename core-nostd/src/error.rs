@@ -99,6 +99,13 @@ pub enum ParamError {
         /// Offending entry.
         param: Param,
     },
+    /// A sequence must not increase (a hysteretic relaxation stiffness
+    /// K_f(d) relaxes with the distance d); `param.index` is the first entry
+    /// above its predecessor.
+    Increasing {
+        /// Offending entry.
+        param: Param,
+    },
     /// The backbone tangent is not positive everywhere on its range, so the
     /// elastic potential would not be convex (seed 000 §2.3.1). `x` is a
     /// point where positivity fails or cannot be proven.
@@ -152,6 +159,9 @@ impl fmt::Display for ParamError {
             } => write!(f, "{param}: expected {expected} entries, got {got}"),
             Self::NotIncreasing { param } => {
                 write!(f, "{param} must be larger than the entry before it")
+            }
+            Self::Increasing { param } => {
+                write!(f, "{param} must not exceed the entry before it")
             }
             Self::TangentNotPositive { x } => {
                 write!(f, "backbone tangent is not provably positive near x = {x}")

@@ -186,7 +186,7 @@ impl<T: Real, const N: usize> Effect<T> for IwanBank<T, N> {
     fn dt(&self) -> Option<f64> {
         None
     }
-    fn rest(&self) -> [T; N] {
+    fn rest(&self, _: T) -> [T; N] {
         [T::ZERO; N]
     }
     #[inline(always)]
@@ -266,11 +266,6 @@ impl<T: Real, const N: usize> IwanSliders<T, N> {
         }
         Ok(Self { cells, fraction })
     }
-
-    /// A relaxed state at displacement `x0` (every spring unloaded).
-    pub fn rest_at(&self, x0: T) -> [T; N] {
-        [x0; N]
-    }
 }
 
 impl<T: Real, const N: usize> Effect<T> for IwanSliders<T, N> {
@@ -283,9 +278,9 @@ impl<T: Real, const N: usize> Effect<T> for IwanSliders<T, N> {
     fn dt(&self) -> Option<f64> {
         None
     }
-    /// Sliders at x = 0; use [`IwanSliders::rest_at`] to start elsewhere.
-    fn rest(&self) -> [T; N] {
-        [T::ZERO; N]
+    /// Every slider at `x0`: the springs are unloaded.
+    fn rest(&self, x0: T) -> [T; N] {
+        [x0; N]
     }
     #[inline(always)]
     fn step(&self, state: &mut [T; N], drive: &Drive<T>) -> EffectOutput<T> {
@@ -498,7 +493,7 @@ mod tests {
         let bb = Polynomial::<f64, 4>::new(&[0.0, 50.0, 0.0, 1.0], (-10.0, 10.0)).unwrap();
         let bush = Bushing::new(bb, (bank.clone(),)).unwrap();
         let mut s = bush.state_at(0.0);
-        let mut f = bank.rest();
+        let mut f = bank.rest(0.0);
         let mut prev = bb.eval(0.0).0;
         for k in 1..100 {
             let x = 0.05 * k as f64;

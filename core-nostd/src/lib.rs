@@ -62,6 +62,7 @@ pub mod error;
 pub mod iwan;
 pub mod maxwell;
 pub mod real;
+pub mod stack;
 pub mod xf;
 
 pub use accumulator::{Accumulator, Compensated, Plain};
@@ -71,4 +72,5 @@ pub use error::{Faults, Param, ParamError};
 pub use iwan::{IwanBank, IwanCellSpec, IwanSliders};
 pub use maxwell::{MaxwellBank, MaxwellCell, MaxwellForm, MaxwellSpec};
 pub use real::Real;
+pub use stack::{FirstLoading, KfTable, Relaxation, StackState, Sts, TurningPoints};
 pub use xf::{XfBank, XfForm, XfSpec};

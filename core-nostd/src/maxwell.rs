@@ -313,7 +313,7 @@ impl<T: Real, const N: usize, A: Accumulator<T>> Effect<T> for MaxwellBank<T, N,
     fn dt(&self) -> Option<f64> {
         Some(self.dt)
     }
-    fn rest(&self) -> [A; N] {
+    fn rest(&self, _: T) -> [A; N] {
         [A::default(); N]
     }
     #[inline(always)]
@@ -449,7 +449,7 @@ mod tests {
         let dt = 1e-5;
         let a = MaxwellBank::<f64, 3>::new(MaxwellForm::LoadExponential, &SPECS, dt).unwrap();
         let b = MaxwellBank::<f64, 3>::new(MaxwellForm::RateExactRamp, &SPECS, dt).unwrap();
-        let (mut sa, mut sb) = (a.rest(), b.rest());
+        let (mut sa, mut sb) = (a.rest(0.0), b.rest(0.0));
         let mut f_prev = 0.0;
         for n in 1..=20_000 {
             let t = n as f64 * dt;
@@ -488,7 +488,7 @@ mod tests {
             1.0,
         )
         .unwrap();
-        let mut s = bank.rest();
+        let mut s = bank.rest(0.0);
         let drive = |df: f32| Drive {
             x: 0.0,
             dx: 0.0,

@@ -227,7 +227,7 @@ impl<T: Real, const N: usize> Effect<T> for XfBank<T, N> {
     fn dt(&self) -> Option<f64> {
         Some(self.dt)
     }
-    fn rest(&self) -> [T; N] {
+    fn rest(&self, _: T) -> [T; N] {
         [T::ZERO; N]
     }
     #[inline(always)]

@@ -6,11 +6,11 @@ use bushing::maxwell::{self, MaxwellCell};
 use bushing::xf::{self, XfCell};
 use bushing::{
     Accumulator, Backbone, Bushing, BushingState, Compensated, Drive, Effect, EffectOutput,
-    IwanCellSpec, MaxwellForm, MaxwellSpec, MonotoneSpline, ParamError, Plain, Polynomial, Real,
-    XfForm, XfSpec,
+    IwanCellSpec, KfTable, MaxwellForm, MaxwellSpec, MonotoneSpline, ParamError, Plain, Polynomial,
+    Real, Sts, TurningPoints, XfForm, XfSpec,
 };
 
-use crate::scene::{BackboneSpec, Effect as EffectDesc, Scene};
+use crate::scene::{BackboneSpec, Effect as EffectDesc, Law, STACK_DEPTH, Scene, TABLE_POINTS};
 
 /// Most polynomial coefficients a scene may give.
 pub const MAX_COEFFICIENTS: usize = 8;
@@ -108,7 +108,7 @@ impl<T: Real> Effect<T> for DynMaxwell<T> {
     fn dt(&self) -> Option<f64> {
         Some(self.dt)
     }
-    fn rest(&self) -> Self::State {
+    fn rest(&self, _: T) -> Self::State {
         if self.compensated {
             DynMaxwellState::Compensated(zeros(self.cells.len()))
         } else {
@@ -140,7 +140,8 @@ pub type Kernel<T, C> = fn(&[C], &mut [T], &Drive<T>) -> EffectOutput<T>;
 pub struct DynBank<T, C> {
     cells: Vec<C>,
     kernel: Kernel<T, C>,
-    rest: T,
+    /// The state word at rest is x0 (slider positions) rather than 0.
+    rest_at_x0: bool,
     fraction: f64,
     dt: Option<f64>,
 }
@@ -155,8 +156,8 @@ impl<T: Real, C> Effect<T> for DynBank<T, C> {
     fn dt(&self) -> Option<f64> {
         self.dt
     }
-    fn rest(&self) -> Vec<T> {
-        vec![self.rest; self.cells.len()]
+    fn rest(&self, x0: T) -> Vec<T> {
+        vec![if self.rest_at_x0 { x0 } else { T::ZERO }; self.cells.len()]
     }
     #[inline]
     fn step(&self, state: &mut Vec<T>, drive: &Drive<T>) -> EffectOutput<T> {
@@ -182,7 +183,7 @@ fn iwan_clamp<T: Real>(specs: &[IwanCellSpec]) -> Result<DynIwanClamp<T>, ParamE
             .map(|(i, s)| ClampCell::new(*s, i))
             .collect::<Result<_, _>>()?,
         kernel: iwan::step_clamp::<T>,
-        rest: T::ZERO,
+        rest_at_x0: false,
         fraction: specs.iter().map(|s| s.g).sum(),
         dt: None,
     })
@@ -191,7 +192,6 @@ fn iwan_clamp<T: Real>(specs: &[IwanCellSpec]) -> Result<DynIwanClamp<T>, ParamE
 fn iwan_sliders<T: Real>(
     specs: &[IwanCellSpec],
     k_ref: f64,
-    x0: T,
 ) -> Result<DynIwanSliders<T>, ParamError> {
     Ok(DynBank {
         cells: specs
@@ -200,7 +200,7 @@ fn iwan_sliders<T: Real>(
             .map(|(i, s)| SliderCell::new(*s, k_ref, i))
             .collect::<Result<_, _>>()?,
         kernel: iwan::step_sliders::<T>,
-        rest: x0,
+        rest_at_x0: true,
         fraction: specs.iter().map(|s| s.g).sum(),
         dt: None,
     })
@@ -217,11 +217,16 @@ fn xf_bank<T: Real>(form: XfForm, specs: &[XfSpec], dt: f64) -> Result<DynXf<T>,
             XfForm::Midpoint => |c, s, d| xf::step_xf(XfForm::Midpoint, c, s, d),
             XfForm::ExactRamp => |c, s, d| xf::step_xf(XfForm::ExactRamp, c, s, d),
         },
-        rest: T::ZERO,
+        rest_at_x0: false,
         fraction: specs.iter().map(|s| s.g).sum(),
         dt: Some(dt),
     })
 }
+
+/// Turning-point model with the STS law.
+pub type StsStack<T> = TurningPoints<Sts<T>, STACK_DEPTH>;
+/// Turning-point model with a measured K_f table.
+pub type TableStack<T> = TurningPoints<KfTable<T, TABLE_POINTS>, STACK_DEPTH>;
 
 /// The effects a scene can name, each present or not.
 pub type SceneEffects<T> = (
@@ -229,6 +234,8 @@ pub type SceneEffects<T> = (
     Option<DynIwanClamp<T>>,
     Option<DynIwanSliders<T>>,
     Option<DynXf<T>>,
+    Option<StsStack<T>>,
+    Option<TableStack<T>>,
 );
 
 /// A bushing built from a scene.
@@ -239,8 +246,8 @@ pub type SceneState<T> = BushingState<T, <SceneEffects<T> as Effect<T>>::State>;
 
 /// Builds the bushing a scene describes, with only its effects.
 pub fn build<T: Real>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
-    let x0 = T::from_f64(crate::profile::displacement(&scene.profile, 0.0));
     let (mut maxwell, mut clamp, mut sliders, mut xf) = (None, None, None, None);
+    let (mut sts, mut table) = (None, None);
     for e in &scene.effects {
         match e {
             EffectDesc::Maxwell {
@@ -257,11 +264,22 @@ pub fn build<T: Real>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
                 slider: true,
                 k_ref,
                 cells,
-            } => sliders = Some(iwan_sliders(cells, *k_ref, x0)?),
+            } => sliders = Some(iwan_sliders(cells, *k_ref)?),
             EffectDesc::Xf { form, cells } => xf = Some(xf_bank(*form, cells, scene.dt)?),
+            EffectDesc::TurningPoints { law, first_loading } => match law {
+                Law::Sts { c, k1 } => {
+                    sts = Some(TurningPoints::new(Sts::new(*c, *k1)?, *first_loading))
+                }
+                Law::Table { d, k } => {
+                    table = Some(TurningPoints::new(KfTable::new(d, k)?, *first_loading));
+                }
+            },
         }
     }
-    Bushing::new(backbone(&scene.backbone)?, (maxwell, clamp, sliders, xf))
+    Bushing::new(
+        backbone(&scene.backbone)?,
+        (maxwell, clamp, sliders, xf, sts, table),
+    )
 }
 
 /// Names of the effects present, in trace-column order.
@@ -277,7 +295,7 @@ pub fn effect_outputs<T: Real>(
     scene: &Scene,
     report: &<SceneEffects<T> as Effect<T>>::Report,
 ) -> Vec<EffectOutput<T>> {
-    let (maxwell, clamp, sliders, xf) = report;
+    let (maxwell, clamp, sliders, xf, sts, table) = report;
     scene
         .effects
         .iter()
@@ -286,6 +304,14 @@ pub fn effect_outputs<T: Real>(
             EffectDesc::Iwan { slider: false, .. } => *clamp,
             EffectDesc::Iwan { slider: true, .. } => *sliders,
             EffectDesc::Xf { .. } => *xf,
+            EffectDesc::TurningPoints {
+                law: Law::Sts { .. },
+                ..
+            } => *sts,
+            EffectDesc::TurningPoints {
+                law: Law::Table { .. },
+                ..
+            } => *table,
         })
         .collect()
 }

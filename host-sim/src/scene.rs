@@ -10,7 +10,10 @@ use std::fmt;
 use std::ops::Range;
 use std::path::Path;
 
-use bushing::{Backbone, IwanCellSpec, MaxwellForm, MaxwellSpec, ParamError, XfForm, XfSpec};
+use bushing::{
+    Backbone, FirstLoading, IwanCellSpec, KfTable, MaxwellForm, MaxwellSpec, ParamError, Sts,
+    XfForm, XfSpec,
+};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -110,6 +113,28 @@ pub enum EffectSpec {
         /// The cells.
         cells: Vec<IwanCellToml>,
     },
+    /// Hysteretic relaxation with a turning-point stack (eqs 1.27-1.29,
+    /// 1.41-1.42).
+    TurningPoints {
+        /// "sts" (continuous STS, needs `c` and `k1`) or "table" (measured
+        /// K_f, needs `d` and `k`).
+        law: String,
+        /// STS constant C in N²/mm.
+        #[serde(default)]
+        c: Option<f64>,
+        /// STS stiffness at a turning point K_1 in N/mm.
+        #[serde(default)]
+        k1: Option<f64>,
+        /// Table: distances from the turning point in mm.
+        #[serde(default)]
+        d: Option<Vec<f64>>,
+        /// Table: K_f in N/mm, non-increasing.
+        #[serde(default)]
+        k: Option<Vec<f64>>,
+        /// "masing" (default) or "ignored".
+        #[serde(default = "default_first_loading")]
+        first_loading: String,
+    },
     /// A bank of nonlinear viscous x_f cells (eq 1.52).
     Xf {
         /// "midpoint" (eq 2.41) or "exact-ramp".
@@ -145,6 +170,10 @@ pub struct XfCellToml {
     pub x_f: f64,
 }
 
+fn default_first_loading() -> String {
+    "masing".into()
+}
+
 fn default_state() -> String {
     "plain".into()
 }
@@ -155,6 +184,7 @@ impl EffectSpec {
         match self {
             Self::Maxwell { .. } => "maxwell",
             Self::Iwan { .. } => "iwan",
+            Self::TurningPoints { .. } => "turning-points",
             Self::Xf { .. } => "xf",
         }
     }
@@ -282,6 +312,13 @@ pub enum Effect {
         /// Cells.
         cells: Vec<IwanCellSpec>,
     },
+    /// A turning-point stack model.
+    TurningPoints {
+        /// The law.
+        law: Law,
+        /// First loading rule.
+        first_loading: FirstLoading,
+    },
     /// An x_f bank.
     Xf {
         /// Form.
@@ -302,6 +339,10 @@ impl Effect {
                 let form = if *slider { "slider" } else { "clamp" };
                 format!("iwan {form} x{}", cells.len())
             }
+            Self::TurningPoints { law, .. } => match law {
+                Law::Sts { .. } => "turning-points sts".into(),
+                Law::Table { d, .. } => format!("turning-points table x{}", d.len()),
+            },
             Self::Xf { form, cells } => format!("xf {} x{}", form.name(), cells.len()),
         }
     }
@@ -312,9 +353,34 @@ impl Effect {
             Self::Maxwell { cells, .. } => cells.iter().map(|c| c.g).sum(),
             Self::Iwan { cells, .. } => cells.iter().map(|c| c.g).sum(),
             Self::Xf { cells, .. } => cells.iter().map(|c| c.g).sum(),
+            Self::TurningPoints { .. } => 0.0,
         }
     }
 }
+
+/// A hysteretic relaxation law, validated.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Law {
+    /// Continuous STS.
+    Sts {
+        /// C in N²/mm.
+        c: f64,
+        /// K_1 in N/mm.
+        k1: f64,
+    },
+    /// Measured K_f(d).
+    Table {
+        /// Distances, mm.
+        d: Vec<f64>,
+        /// K_f, N/mm.
+        k: Vec<f64>,
+    },
+}
+
+/// Turning points a scene's stack model holds.
+pub const STACK_DEPTH: usize = 32;
+/// Points a scene's K_f table may hold.
+pub const TABLE_POINTS: usize = 64;
 
 /// Largest bank a scene may ask for.
 pub const MAX_CELLS: usize = 64;
@@ -478,6 +544,42 @@ fn validate_effect(spec: EffectSpec, dt: f64, k_at_rest: f64) -> Result<Effect, 
                 k_ref,
                 cells,
             })
+        }
+        EffectSpec::TurningPoints {
+            law,
+            c,
+            k1,
+            d,
+            k,
+            first_loading,
+        } => {
+            let first_loading = match first_loading.as_str() {
+                "masing" => FirstLoading::Masing,
+                "ignored" => FirstLoading::Ignored,
+                other => {
+                    return Err(format!(
+                        "first_loading '{other}' is not one of masing, ignored"
+                    ));
+                }
+            };
+            let law = match (law.as_str(), c, k1, d, k) {
+                ("sts", Some(c), Some(k1), None, None) => {
+                    Sts::<f64>::new(c, k1).map_err(|e| e.to_string())?;
+                    Law::Sts { c, k1 }
+                }
+                ("sts", ..) => {
+                    return Err("law 'sts' takes c (N²/mm) and k1 (N/mm), and no d or k".into());
+                }
+                ("table", None, None, Some(d), Some(k)) => {
+                    KfTable::<f64, TABLE_POINTS>::new(&d, &k).map_err(|e| e.to_string())?;
+                    Law::Table { d, k }
+                }
+                ("table", ..) => {
+                    return Err("law 'table' takes d (mm) and k (N/mm), and no c or k1".into());
+                }
+                (other, ..) => return Err(format!("law '{other}' is not one of sts, table")),
+            };
+            Ok(Effect::TurningPoints { law, first_loading })
         }
         EffectSpec::Xf { form, cells } => {
             let form = XfForm::from_name(&form)
@@ -655,6 +757,41 @@ cycles = 3
         assert!(
             e.message.contains("effects[1]: a second 'maxwell' effect"),
             "{e}"
+        );
+    }
+
+    #[test]
+    fn turning_point_laws_are_checked() {
+        let sts = GOOD.replace(
+            "[profile]",
+            "[[effects]]\ntype = \"turning-points\"\nlaw = \"sts\"\nc = 400.0\nk1 = 300.0\n[profile]",
+        );
+        let s = Scene::parse("s.toml", &sts).unwrap();
+        assert_eq!(s.effects[1].name(), "turning-points sts");
+        assert_eq!(s.effects[1].fraction(), 0.0);
+        let missing = sts.replace("k1 = 300.0\n", "");
+        let e = Scene::parse("s.toml", &missing).unwrap_err();
+        assert!(
+            e.message
+                .contains("law 'sts' takes c (N²/mm) and k1 (N/mm)"),
+            "{e}"
+        );
+        let table = sts.replace(
+            "law = \"sts\"\nc = 400.0\nk1 = 300.0",
+            "law = \"table\"\nd = [0.0, 0.5]\nk = [100.0, 120.0]",
+        );
+        let e = Scene::parse("s.toml", &table).unwrap_err();
+        assert!(
+            e.message
+                .contains("k[1] must not exceed the entry before it"),
+            "{e}"
+        );
+        let first = sts.replace("k1 = 300.0", "k1 = 300.0\nfirst_loading = \"later\"");
+        assert!(
+            Scene::parse("s.toml", &first)
+                .unwrap_err()
+                .message
+                .contains("not one of masing, ignored")
         );
     }
 
