@@ -8,6 +8,7 @@
 //! modulus of the Maxwell forms against the closed form.
 #![forbid(unsafe_code)]
 
+pub mod iwan_report;
 pub mod model;
 pub mod modulus;
 pub mod profile;

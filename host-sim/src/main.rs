@@ -3,13 +3,14 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use bushing_sim::{Scene, modulus, run, xf_report};
+use bushing_sim::{Scene, iwan_report, modulus, run, xf_report};
 
 const USAGE: &str = "\
 usage:
   bushing-sim run SCENE.toml --out DIR     simulate a scene: DIR/trace.csv, DIR/*.svg
   bushing-sim maxwell-table [--out FILE]   complex-modulus error of every Maxwell form
   bushing-sim xf-table [--out FILE]        saturation of the x_f cell forms against the step
+  bushing-sim iwan-table [--out FILE]      Iwan discretisations of the STS and Segalman laws
   bushing-sim help";
 
 fn main() -> ExitCode {
@@ -38,6 +39,15 @@ fn dispatch(args: &[String]) -> Result<(), String> {
         }
         ["maxwell-table", "--out", file] => {
             std::fs::write(file, modulus::table()).map_err(|e| format!("{file}: {e}"))?;
+            println!("wrote {file}");
+            Ok(())
+        }
+        ["iwan-table"] => {
+            print!("{}", iwan_report::table());
+            Ok(())
+        }
+        ["iwan-table", "--out", file] => {
+            std::fs::write(file, iwan_report::table()).map_err(|e| format!("{file}: {e}"))?;
             println!("wrote {file}");
             Ok(())
         }

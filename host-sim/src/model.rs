@@ -189,7 +189,8 @@ fn iwan_clamp<T: Real>(specs: &[IwanCellSpec]) -> Result<DynIwanClamp<T>, ParamE
     })
 }
 
-fn iwan_sliders<T: Real>(
+/// A run-time sized slider-form Iwan bank.
+pub fn iwan_sliders<T: Real>(
     specs: &[IwanCellSpec],
     k_ref: f64,
 ) -> Result<DynIwanSliders<T>, ParamError> {
