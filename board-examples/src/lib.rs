@@ -6,8 +6,9 @@
 use core::f64::consts::PI;
 
 use bushing::{
-    Backbone, Bushing, Compensated, Effect, IwanBank, IwanCellSpec, IwanSliders, MaxwellBank,
-    MaxwellForm, MaxwellSpec, MonotoneSpline, ParamError, Polynomial, XfBank, XfForm, XfSpec,
+    Backbone, Berg, BoucWen, Bushing, Compensated, Dahl, Effect, FirstLoading, IwanBank,
+    IwanCellSpec, IwanSliders, MaxwellBank, MaxwellForm, MaxwellSpec, MonotoneSpline, Oscillator,
+    ParamError, Polynomial, Sts, TurningPoints, XfBank, XfForm, XfSpec,
 };
 
 /// Control period of the probes: 2 kHz.
@@ -101,6 +102,64 @@ pub fn composite() -> Result<Composite, ParamError> {
     let jenkins = [JENKINS[0], JENKINS[1], JENKINS[2]];
     let xf = XfBank::new(XfForm::ExactRamp, &[XfSpec::hz(0.005, 0.2, 0.02)], DT)?;
     Bushing::new(polynomial()?, (maxwell, IwanBank::new(&jenkins)?, xf))
+}
+
+/// Polynomial backbone with one added single cell (or stack model) `C`.
+pub type Single<C> = Bushing<f32, Polynomial<f32, 4>, (C,)>;
+
+/// A Dahl cell of exponent `alpha` (200 N/mm at rest, 10 N).
+pub fn dahl(alpha: f64) -> Result<Single<Dahl<f32>>, ParamError> {
+    Bushing::new(polynomial()?, (Dahl::new(200.0, 10.0, alpha)?,))
+}
+
+/// A Bouc-Wen cell of exponent `n` (200 N/mm at rest).
+pub fn bouc_wen(n: f64) -> Result<Single<BoucWen<f32>>, ParamError> {
+    Bushing::new(polynomial()?, (BoucWen::new(20.0, 10.0, 60.0, 20.0, n)?,))
+}
+
+/// A Berg cell (12 N, half of it at 0.05 mm).
+pub fn berg() -> Result<Single<Berg<f32>>, ParamError> {
+    Bushing::new(polynomial()?, (Berg::new(12.0, 0.05)?,))
+}
+
+/// The continuous STS law on a 16-deep turning-point stack.
+pub type Sts16 = Single<TurningPoints<Sts<f32>, 16>>;
+
+/// The STS stack model (C = 400 N²/mm, K_1 = 300 N/mm, Masing).
+pub fn sts16() -> Result<Sts16, ParamError> {
+    Bushing::new(
+        polynomial()?,
+        (TurningPoints::new(
+            Sts::new(400.0, 300.0)?,
+            FirstLoading::Masing,
+        ),),
+    )
+}
+
+/// The reference Iwan oscillator of seed 004 §4.1 (20 Jenkins cells on a
+/// parallel spring of 5, K_0 = 6), at 200 Hz.
+pub type IwanOscillator = Oscillator<f32, Polynomial<f32, 2>, (IwanBank<f32, 20>,)>;
+
+/// Builds the [`IwanOscillator`].
+pub fn iwan_oscillator() -> Result<IwanOscillator, ParamError> {
+    let mut cells = [IwanCellSpec::new(0.0, 1.0); 20];
+    for (i, c) in cells.iter_mut().enumerate() {
+        let phi = 0.2 + 1.8 * i as f64 / 19.0;
+        *c = IwanCellSpec::from_slip_distance(0.05 / 6.0, 6.0, phi);
+    }
+    let restoring = Bushing::new(Polynomial::linear(6.0)?, (IwanBank::new(&cells)?,))?;
+    Oscillator::new(restoring, 0.005)
+}
+
+/// Runs `steps` steps of a free decay of `osc` from 1.5, feeding the
+/// displacement and the iteration count to `sink`.
+#[inline(never)]
+pub fn run_oscillator(osc: &IwanOscillator, steps: usize, mut sink: impl FnMut(f32, u32)) {
+    let mut s = osc.state_at(1.5, 0.0, 0.0);
+    for _ in 0..steps {
+        let o = osc.step(&mut s, core::hint::black_box(0.0));
+        sink(o.p, o.iterations);
+    }
 }
 
 /// Triangle input of `N` samples between -2 and 2 mm.

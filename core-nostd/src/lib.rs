@@ -9,9 +9,15 @@
 //! Maxwell cells of [`maxwell`] in all five discrete forms of the thesis,
 //! the Iwan banks of Jenkins cells of [`iwan`] (force-saturation and slider
 //! forms) and the nonlinear viscous x_f cells of [`xf`], between
-//! viscoelasticity and friction. A [`Bushing`] joins them; effects compose as
-//! tuples at compile time, so an effect a firmware build does not name costs
-//! nothing.
+//! viscoelasticity and friction. The order-independent hysteresis laws
+//! (a measured K_f(d) or the continuous STS) run on the turning-point stack
+//! of [`stack`]; [`discretize`] turns them, and Segalman's four-parameter
+//! Iwan, into banks of Jenkins cells; [`friction`] holds the Dahl, Bouc-Wen
+//! and Berg cells the thesis compares them with. A [`Bushing`] joins them;
+//! effects compose as tuples at compile time, so an effect a firmware build
+//! does not name costs nothing. [`oscillator`] integrates a unit-mass mode
+//! whose restoring force is any bushing (the Iwan oscillator of the joint
+//! thesis, "seed 004").
 //!
 //! ## The contract
 //!

@@ -5,12 +5,14 @@ use bushing::iwan::{self, ClampCell, SliderCell};
 use bushing::maxwell::{self, MaxwellCell};
 use bushing::xf::{self, XfCell};
 use bushing::{
-    Accumulator, Backbone, Bushing, BushingState, Compensated, Drive, Effect, EffectOutput,
-    IwanCellSpec, KfTable, MaxwellForm, MaxwellSpec, MonotoneSpline, ParamError, Plain, Polynomial,
-    Real, Sts, TurningPoints, XfForm, XfSpec,
+    Accumulator, Backbone, Berg, BoucWen, Bushing, BushingState, Compensated, Dahl, Drive, Effect,
+    EffectOutput, IwanCellSpec, KfTable, MaxwellForm, MaxwellSpec, MonotoneSpline, ParamError,
+    Plain, Polynomial, Real, Sts, TurningPoints, XfForm, XfSpec,
 };
 
-use crate::scene::{BackboneSpec, Effect as EffectDesc, Law, STACK_DEPTH, Scene, TABLE_POINTS};
+use crate::scene::{
+    BackboneSpec, Effect as EffectDesc, Friction, Law, STACK_DEPTH, Scene, TABLE_POINTS,
+};
 
 /// Most polynomial coefficients a scene may give.
 pub const MAX_COEFFICIENTS: usize = 8;
@@ -229,14 +231,19 @@ pub type StsStack<T> = TurningPoints<Sts<T>, STACK_DEPTH>;
 /// Turning-point model with a measured K_f table.
 pub type TableStack<T> = TurningPoints<KfTable<T, TABLE_POINTS>, STACK_DEPTH>;
 
+/// The stack models a scene can name.
+pub type SceneStacks<T> = (Option<StsStack<T>>, Option<TableStack<T>>);
+/// The single friction cells a scene can name.
+pub type SceneFriction<T> = (Option<Dahl<T>>, Option<BoucWen<T>>, Option<Berg<T>>);
+
 /// The effects a scene can name, each present or not.
 pub type SceneEffects<T> = (
     Option<DynMaxwell<T>>,
     Option<DynIwanClamp<T>>,
     Option<DynIwanSliders<T>>,
     Option<DynXf<T>>,
-    Option<StsStack<T>>,
-    Option<TableStack<T>>,
+    SceneStacks<T>,
+    SceneFriction<T>,
 );
 
 /// A bushing built from a scene.
@@ -249,6 +256,7 @@ pub type SceneState<T> = BushingState<T, <SceneEffects<T> as Effect<T>>::State>;
 pub fn build<T: Real>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
     let (mut maxwell, mut clamp, mut sliders, mut xf) = (None, None, None, None);
     let (mut sts, mut table) = (None, None);
+    let (mut dahl, mut bouc_wen, mut berg) = (None, None, None);
     for e in &scene.effects {
         match e {
             EffectDesc::Maxwell {
@@ -275,11 +283,31 @@ pub fn build<T: Real>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
                     table = Some(TurningPoints::new(KfTable::new(d, k)?, *first_loading));
                 }
             },
+            EffectDesc::Friction(Friction::Dahl { k_d, f_f, alpha }) => {
+                dahl = Some(Dahl::new(*k_d, *f_f, *alpha)?);
+            }
+            EffectDesc::Friction(Friction::BoucWen {
+                alpha,
+                a,
+                beta,
+                gamma,
+                n,
+            }) => bouc_wen = Some(BoucWen::new(*alpha, *a, *beta, *gamma, *n)?),
+            EffectDesc::Friction(Friction::Berg { f_max, x2 }) => {
+                berg = Some(Berg::new(*f_max, *x2)?);
+            }
         }
     }
     Bushing::new(
         backbone(&scene.backbone)?,
-        (maxwell, clamp, sliders, xf, sts, table),
+        (
+            maxwell,
+            clamp,
+            sliders,
+            xf,
+            (sts, table),
+            (dahl, bouc_wen, berg),
+        ),
     )
 }
 
@@ -296,7 +324,7 @@ pub fn effect_outputs<T: Real>(
     scene: &Scene,
     report: &<SceneEffects<T> as Effect<T>>::Report,
 ) -> Vec<EffectOutput<T>> {
-    let (maxwell, clamp, sliders, xf, sts, table) = report;
+    let (maxwell, clamp, sliders, xf, (sts, table), (dahl, bouc_wen, berg)) = report;
     scene
         .effects
         .iter()
@@ -313,6 +341,9 @@ pub fn effect_outputs<T: Real>(
                 law: Law::Table { .. },
                 ..
             } => *table,
+            EffectDesc::Friction(Friction::Dahl { .. }) => *dahl,
+            EffectDesc::Friction(Friction::BoucWen { .. }) => *bouc_wen,
+            EffectDesc::Friction(Friction::Berg { .. }) => *berg,
         })
         .collect()
 }

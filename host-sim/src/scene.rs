@@ -142,6 +142,40 @@ pub enum EffectSpec {
         /// The cells.
         cells: Vec<XfCellToml>,
     },
+    /// Dahl's friction cell (eq 1.43).
+    Dahl {
+        /// Initial stiffness in N/mm.
+        k_d: f64,
+        /// Friction force in N.
+        f_f: f64,
+        /// Exponent (default 1).
+        #[serde(default = "default_exponent")]
+        alpha: f64,
+    },
+    /// The Bouc-Wen cell (eq 1.44, the thesis's naming).
+    BoucWen {
+        /// Force scale in N/mm.
+        alpha: f64,
+        /// A.
+        a: f64,
+        /// β.
+        beta: f64,
+        /// γ, with |γ| < β.
+        gamma: f64,
+        /// Exponent n.
+        n: f64,
+    },
+    /// Berg's friction cell (eq 1.45).
+    Berg {
+        /// Largest friction force in N.
+        f_max: f64,
+        /// Displacement in mm at which half of it is reached from rest.
+        x2: f64,
+    },
+}
+
+fn default_exponent() -> f64 {
+    1.0
 }
 
 /// One Jenkins cell: a fraction and either a slip force or a slip distance.
@@ -186,6 +220,9 @@ impl EffectSpec {
             Self::Iwan { .. } => "iwan",
             Self::TurningPoints { .. } => "turning-points",
             Self::Xf { .. } => "xf",
+            Self::Dahl { .. } => "dahl",
+            Self::BoucWen { .. } => "bouc-wen",
+            Self::Berg { .. } => "berg",
         }
     }
 }
@@ -326,6 +363,43 @@ pub enum Effect {
         /// Cells (ω in rad/s).
         cells: Vec<XfSpec>,
     },
+    /// A single friction cell.
+    Friction(Friction),
+}
+
+/// A validated single friction cell (parameters in f64; the model is built
+/// in the run's number type).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Friction {
+    /// Dahl (eq 1.43).
+    Dahl {
+        /// Initial stiffness, N/mm.
+        k_d: f64,
+        /// Friction force, N.
+        f_f: f64,
+        /// Exponent.
+        alpha: f64,
+    },
+    /// Bouc-Wen (eq 1.44).
+    BoucWen {
+        /// Force scale, N/mm.
+        alpha: f64,
+        /// A.
+        a: f64,
+        /// β.
+        beta: f64,
+        /// γ.
+        gamma: f64,
+        /// n.
+        n: f64,
+    },
+    /// Berg (eq 1.45).
+    Berg {
+        /// Largest friction force, N.
+        f_max: f64,
+        /// Half-force displacement, mm.
+        x2: f64,
+    },
 }
 
 impl Effect {
@@ -344,6 +418,9 @@ impl Effect {
                 Law::Table { d, .. } => format!("turning-points table x{}", d.len()),
             },
             Self::Xf { form, cells } => format!("xf {} x{}", form.name(), cells.len()),
+            Self::Friction(Friction::Dahl { alpha, .. }) => format!("dahl alpha={alpha}"),
+            Self::Friction(Friction::BoucWen { n, .. }) => format!("bouc-wen n={n}"),
+            Self::Friction(Friction::Berg { .. }) => "berg".into(),
         }
     }
 
@@ -353,7 +430,7 @@ impl Effect {
             Self::Maxwell { cells, .. } => cells.iter().map(|c| c.g).sum(),
             Self::Iwan { cells, .. } => cells.iter().map(|c| c.g).sum(),
             Self::Xf { cells, .. } => cells.iter().map(|c| c.g).sum(),
-            Self::TurningPoints { .. } => 0.0,
+            Self::TurningPoints { .. } | Self::Friction(_) => 0.0,
         }
     }
 }
@@ -594,6 +671,30 @@ fn validate_effect(spec: EffectSpec, dt: f64, k_at_rest: f64) -> Result<Effect, 
             }
             Ok(Effect::Xf { form, cells })
         }
+        EffectSpec::Dahl { k_d, f_f, alpha } => {
+            bushing::Dahl::<f64>::new(k_d, f_f, alpha).map_err(|e| e.to_string())?;
+            Ok(Effect::Friction(Friction::Dahl { k_d, f_f, alpha }))
+        }
+        EffectSpec::BoucWen {
+            alpha,
+            a,
+            beta,
+            gamma,
+            n,
+        } => {
+            bushing::BoucWen::<f64>::new(alpha, a, beta, gamma, n).map_err(|e| e.to_string())?;
+            Ok(Effect::Friction(Friction::BoucWen {
+                alpha,
+                a,
+                beta,
+                gamma,
+                n,
+            }))
+        }
+        EffectSpec::Berg { f_max, x2 } => {
+            bushing::Berg::<f64>::new(f_max, x2).map_err(|e| e.to_string())?;
+            Ok(Effect::Friction(Friction::Berg { f_max, x2 }))
+        }
     }
 }
 
@@ -758,6 +859,37 @@ cycles = 3
             e.message.contains("effects[1]: a second 'maxwell' effect"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn friction_cells_are_checked() {
+        let cells = GOOD.replace(
+            "[profile]",
+            "[[effects]]\ntype = \"dahl\"\nk_d = 200.0\nf_f = 10.0\n\
+             [[effects]]\ntype = \"bouc-wen\"\nalpha = 20.0\na = 10.0\nbeta = 60.0\ngamma = 20.0\nn = 8.0\n\
+             [[effects]]\ntype = \"berg\"\nf_max = 12.0\nx2 = 0.05\n[profile]",
+        );
+        let s = Scene::parse("s.toml", &cells).unwrap();
+        let names: Vec<_> = s.effects.iter().map(Effect::name).collect();
+        assert_eq!(names[1..], ["dahl alpha=1", "bouc-wen n=8", "berg"]);
+        assert_eq!(
+            s.effects.iter().skip(1).map(Effect::fraction).sum::<f64>(),
+            0.0
+        );
+        let bad = cells.replace("gamma = 20.0", "gamma = 70.0");
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
+        assert!(
+            e.message
+                .contains("effects[2] (bouc-wen): beta - |gamma| must be"),
+            "{e}"
+        );
+        let bad = cells.replace("x2 = 0.05", "x2 = 0.0");
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
+        assert!(e.message.contains("effects[3] (berg): x2 must be"), "{e}");
+        let bad = cells.replace("f_f = 10.0", "f_f = 10.0\nmu = 0.3");
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
+        assert!(e.message.contains("mu"), "{e}");
+        assert!(e.at.is_some(), "{e}");
     }
 
     #[test]

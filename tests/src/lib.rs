@@ -131,6 +131,7 @@ pub const CASES: &[Case] = &[
         "iwan_oscillator_free_decay_f32",
         iwan_oscillator_free_decay_f32,
     ),
+    ("golden_trace_friction_f32", golden_trace_friction_f32),
 ];
 
 /// Runs every case, printing one line each and the closing
@@ -697,6 +698,83 @@ fn golden_trace_hysteresis_f32() -> CaseResult {
             got: 0.0,
             bound: 0.0,
             bits: Some((h, GOLDEN_HYSTERESIS_HASH)),
+        })
+    }
+}
+
+/// Hash of the friction golden trace (see [`GOLDEN_HASH`]).
+pub const GOLDEN_FRICTION_HASH: u64 = 0x8533_a0a9_46b1_a437;
+
+/// The cells that call libm per step, in f32: the STS law on an 8-deep
+/// turning-point stack (so that it overflows), Dahl (α = 0.7), Bouc-Wen
+/// (n = 3) and Berg on one linear backbone under a sine of falling
+/// amplitude with a NaN inside; then the reference Iwan oscillator under a forced sine.
+/// Hashes force, tangent and energy of the bushing, and p, v and the
+/// restoring force of the oscillator.
+pub fn golden_trace_friction() -> Result<u64, Failure> {
+    let stack = TurningPoints::<_, 8>::new(
+        Sts::<f32>::new(400.0, 300.0).map_err(param)?,
+        FirstLoading::Masing,
+    );
+    let dahl = Dahl::<f32>::new(200.0, 10.0, 0.7).map_err(param)?;
+    let bouc_wen = BoucWen::<f32>::new(20.0, 10.0, 60.0, 20.0, 3.0).map_err(param)?;
+    let berg = Berg::<f32>::new(12.0, 0.05).map_err(param)?;
+    let b = Bushing::new(
+        Polynomial::<f32, 2>::linear(100.0).map_err(param)?,
+        (stack, dahl, bouc_wen, berg),
+    )
+    .map_err(param)?;
+    let mut s = b.state_at(0.0);
+    let mut hash = TraceHash::new();
+    let dt = 5e-4;
+    // A 23 Hz sine whose amplitude falls from 1.5 to 0.15 mm: every
+    // reversal lies inside the last one, so the turning points pile up.
+    let w = (core::f64::consts::TAU * 23.0 * dt) as f32;
+    let fall = 0.9 / GOLDEN_STEPS as f32;
+    for n in 0..GOLDEN_STEPS {
+        let t = n as f32;
+        let mut x = 1.5 * (1.0 - fall * t) * libm::sinf(w * t);
+        if n == 3000 {
+            x = f32::NAN;
+        }
+        let out = b.step(&mut s, x);
+        hash.push(out.force);
+        hash.push(out.tangent);
+        hash.push(out.dissipated);
+        if let Some((k, d, w, g)) = out.effects {
+            for e in [k, d, w, g] {
+                holds(
+                    "no friction cell reports negative dissipation",
+                    e.dissipated >= 0.0,
+                )?;
+            }
+        }
+    }
+    holds("friction golden trace saw its fault", s.rejected() == 1)?;
+    holds("the 8-deep stack overflowed", s.effects().0.overflows() > 0)?;
+    let osc = Oscillator::new(reference_iwan::<f32>()?, 0.01).map_err(param)?;
+    let mut so = osc.state_at(0.0, 0.0, 0.0);
+    let w = (2.3 * 0.01) as f32;
+    for n in 1..=4000 {
+        let out = osc.step(&mut so, 1.2 * libm::sinf(w * n as f32));
+        holds("oscillator converged", out.converged)?;
+        hash.push(out.p);
+        hash.push(out.v);
+        hash.push(out.force);
+    }
+    Ok(hash.value())
+}
+
+fn golden_trace_friction_f32() -> CaseResult {
+    let h = golden_trace_friction()?;
+    if h == GOLDEN_FRICTION_HASH {
+        Ok(())
+    } else {
+        Err(Failure {
+            what: "friction golden trace hash differs from the host's",
+            got: 0.0,
+            bound: 0.0,
+            bits: Some((h, GOLDEN_FRICTION_HASH)),
         })
     }
 }

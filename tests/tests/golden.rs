@@ -25,3 +25,14 @@ fn hysteresis_golden_trace_hash_is_the_committed_one() {
         "kernel output changed; if deliberate, set GOLDEN_HYSTERESIS_HASH = {h:#018x}"
     );
 }
+
+#[test]
+fn friction_golden_trace_hash_is_the_committed_one() {
+    let h = bushing_tests::golden_trace_friction().expect("golden trace runs");
+    println!("friction golden trace hash: {h:#018x}");
+    assert_eq!(
+        h,
+        bushing_tests::GOLDEN_FRICTION_HASH,
+        "kernel output changed; if deliberate, set GOLDEN_FRICTION_HASH = {h:#018x}"
+    );
+}

@@ -128,6 +128,48 @@ fn composite_scene_equals_the_const_generic_kernels() {
 }
 
 #[test]
+fn friction_scene_equals_the_const_generic_cells_and_stays_bounded() {
+    use bushing::{Berg, BoucWen, Dahl};
+    let scene = Scene::load(&root().join("scenes/friction-cells.toml")).unwrap();
+    assert_eq!(scene.effects.len(), 3);
+    let dyn_bushing = bushing_sim::model::build::<f32>(&scene).unwrap();
+    let dahl = Dahl::<f32>::new(200.0, 10.0, 1.0).unwrap();
+    let bouc_wen = BoucWen::<f32>::new(20.0, 10.0, 60.0, 20.0, 8.0).unwrap();
+    let berg = Berg::<f32>::new(12.0, 0.05).unwrap();
+    let ultimate = bouc_wen.ultimate_force();
+    assert!((ultimate - 20.0 * (1.0f32 / 8.0).powf(1.0 / 8.0)).abs() < 1e-4);
+    let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0)).unwrap();
+    let fixed = Bushing::new(backbone, (dahl, bouc_wen, berg)).unwrap();
+    assert_eq!(fixed.g0(), 1.0);
+    let (mut sd, mut sf) = (dyn_bushing.state_at(0.0), fixed.state_at(0.0));
+    let mut energy = [0.0f64; 3];
+    let mut peak = [0.0f32; 3];
+    for n in 1..=scene.steps() {
+        let x = bushing_sim::profile::displacement(&scene.profile, n as f64 * scene.dt) as f32;
+        let (a, b) = (dyn_bushing.step(&mut sd, x), fixed.step(&mut sf, x));
+        assert_eq!(
+            (a.force, a.tangent, a.dissipated),
+            (b.force, b.tangent, b.dissipated),
+            "step {n}"
+        );
+        let (d, w, g) = b.effects.unwrap();
+        for (i, e) in [d, w, g].into_iter().enumerate() {
+            assert!(e.dissipated >= 0.0, "cell {i} at step {n}");
+            energy[i] += e.dissipated as f64;
+            peak[i] = peak[i].max(e.force.abs());
+        }
+        assert!(d.force.abs() <= 10.0 && g.force.abs() < 12.0);
+        assert!(w.force.abs() <= ultimate * (1.0 + 1e-6));
+    }
+    // Triangles of 1 mm drive every cell to within 1 % of its saturation.
+    assert!(peak[0] > 0.99 * 10.0 && peak[1] > 0.99 * ultimate && peak[2] > 0.9 * 12.0);
+    // Three closed loops, each about 4 F_sat x 1 mm of area per cycle.
+    for (i, e) in energy.iter().enumerate() {
+        assert!(*e > 3.0 * 2.0 * peak[i] as f64, "cell {i}: {e} mJ");
+    }
+}
+
+#[test]
 fn committed_xf_table_is_current() {
     let path = root().join("docs/xf-saturation.md");
     let committed = std::fs::read_to_string(path).expect("docs/xf-saturation.md");

@@ -10,8 +10,8 @@ mod firmware {
     use bushing::MaxwellForm;
     use bushing::XfForm;
     use bushing_boards::{
-        composite, iwan4, maxwell4, maxwell4_compensated, polynomial, run, sliders4, spline,
-        triangle, xf2,
+        berg, bouc_wen, composite, dahl, iwan_oscillator, iwan4, maxwell4, maxwell4_compensated,
+        polynomial, run, run_oscillator, sliders4, spline, sts16, triangle, xf2,
     };
     use cortex_m::peripheral::{SYST, syst::SystClkSource};
     use cortex_m_rt::entry;
@@ -116,6 +116,36 @@ mod firmware {
         let Ok(b) = composite() else { fail() };
         let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
         report("3 Maxwell + 3 Jenkins + 1 x_f", t);
+        let Ok(b) = sts16() else { fail() };
+        let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+        report("STS on a 16-deep turning-point stack", t);
+        for (alpha, name) in [(1.0, "Dahl, alpha = 1"), (0.5, "Dahl, alpha = 0.5")] {
+            let Ok(b) = dahl(alpha) else { fail() };
+            let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+            report(name, t);
+        }
+        for (n, name) in [(2.0, "Bouc-Wen, n = 2"), (8.0, "Bouc-Wen, n = 8")] {
+            let Ok(b) = bouc_wen(n) else { fail() };
+            let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+            report(name, t);
+        }
+        let Ok(b) = berg() else { fail() };
+        let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+        report("Berg", t);
+        let Ok(osc) = iwan_oscillator() else { fail() };
+        let mut iterations = 0u32;
+        let t = per_step(&mut syst, baseline, || {
+            run_oscillator(&osc, STEPS, |p, n| {
+                core::hint::black_box(p);
+                iterations += n;
+            })
+        });
+        report("Iwan oscillator (20 cells), one step", t);
+        hprintln!(
+            "  chord iterations per step: {}.{:02}",
+            iterations as usize / STEPS,
+            iterations as usize * 100 / STEPS % 100
+        );
         debug::exit(debug::EXIT_SUCCESS);
         loop {
             cortex_m::asm::nop();
