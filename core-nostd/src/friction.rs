@@ -103,34 +103,13 @@ impl<T: Real> Dahl<T> {
     }
 }
 
-impl<T: Real> Effect<T> for Dahl<T> {
-    type State = CellState<T>;
-    type Report = EffectOutput<T>;
-    fn fraction(&self) -> f64 {
-        0.0
+impl<T: Real> Dahl<T> {
+    fn rest_slope(&self) -> T {
+        self.k_d
     }
-    fn dt(&self) -> Option<f64> {
-        None
-    }
-    fn rest(&self, x0: T) -> CellState<T> {
-        CellState {
-            x: x0,
-            slope: self.k_d,
-            ..CellState::default()
-        }
-    }
-    #[inline]
-    fn step(&self, st: &mut CellState<T>, drive: &Drive<T>) -> EffectOutput<T> {
-        let dx = drive.x - st.x;
-        let s = direction(dx);
-        if s == T::ZERO {
-            return EffectOutput {
-                force: st.force,
-                tangent: st.slope,
-                dissipated: T::ZERO,
-            };
-        }
-        let xi = dx.abs();
+    /// One step of travel `xi` in direction `s`.
+    #[inline(always)]
+    fn advance(&self, st: &mut CellState<T>, drive: &Drive<T>, s: T, xi: T) -> EffectOutput<T> {
         let two = T::ONE + T::ONE;
         let u0 = (T::ONE - s * st.force * self.inv_f_f).max(T::ZERO).min(two);
         let c = self.k_d * self.inv_f_f * xi;
@@ -162,10 +141,6 @@ impl<T: Real> Effect<T> for Dahl<T> {
             dissipated: T::HALF * xi * self.f_f * (p0 + p1),
         }
     }
-    #[inline(always)]
-    fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
-        *report
-    }
 }
 
 /// The Bouc-Wen cell (eq 1.44, the thesis's naming):
@@ -193,6 +168,8 @@ pub struct BoucWen<T> {
     n_minus_1: T,
     w_u: T,
     k0: T,
+    inv_alpha: T,
+    alpha_over_a: T,
 }
 
 impl<T: Real> BoucWen<T> {
@@ -218,6 +195,8 @@ impl<T: Real> BoucWen<T> {
             n_minus_1: T::from_f64(n - 1.0),
             w_u: T::from_f64(w_u),
             k0: T::from_f64(alpha * a),
+            inv_alpha: T::from_f64(1.0 / alpha),
+            alpha_over_a: T::from_f64(alpha / a),
         })
     }
 
@@ -245,36 +224,14 @@ impl<T: Real> BoucWen<T> {
     }
 }
 
-impl<T: Real> Effect<T> for BoucWen<T> {
-    type State = CellState<T>;
-    type Report = EffectOutput<T>;
-    fn fraction(&self) -> f64 {
-        0.0
+impl<T: Real> BoucWen<T> {
+    fn rest_slope(&self) -> T {
+        self.k0
     }
-    fn dt(&self) -> Option<f64> {
-        None
-    }
-    fn rest(&self, x0: T) -> CellState<T> {
-        CellState {
-            x: x0,
-            slope: self.k0,
-            ..CellState::default()
-        }
-    }
-    #[inline]
-    fn step(&self, st: &mut CellState<T>, drive: &Drive<T>) -> EffectOutput<T> {
-        let dx = drive.x - st.x;
-        let s = direction(dx);
-        if s == T::ZERO {
-            return EffectOutput {
-                force: st.force,
-                tangent: st.slope,
-                dissipated: T::ZERO,
-            };
-        }
-        let xi = dx.abs();
-        let inv_alpha = T::ONE / self.alpha;
-        let w0 = s * st.force * inv_alpha;
+    /// One step of travel `xi` in direction `s`.
+    #[inline(always)]
+    fn advance(&self, st: &mut CellState<T>, drive: &Drive<T>, s: T, xi: T) -> EffectOutput<T> {
+        let w0 = s * st.force * self.inv_alpha;
         let (mut lo, mut hi) = if w0 < self.w_u {
             (w0, self.w_u)
         } else {
@@ -312,7 +269,7 @@ impl<T: Real> Effect<T> for BoucWen<T> {
         // P = (α / A) |ẋ| w c |w|^n >= 0 (w and c have the same sign).
         let density = |w: T, c: T, p: T| w * c * p;
         let dissipated =
-            T::HALF * xi * self.alpha / self.a * (density(w0, c0, p0) + density(w, c1, p1));
+            T::HALF * xi * self.alpha_over_a * (density(w0, c0, p0) + density(w, c1, p1));
         st.x = drive.x;
         st.force = force;
         st.slope = slope;
@@ -321,10 +278,6 @@ impl<T: Real> Effect<T> for BoucWen<T> {
             tangent: slope,
             dissipated,
         }
-    }
-    #[inline(always)]
-    fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
-        *report
     }
 }
 
@@ -351,6 +304,7 @@ impl<T: Real> Effect<T> for BoucWen<T> {
 pub struct Berg<T> {
     f_max: T,
     x2: T,
+    inv_x2: T,
     inv_f_max: T,
 }
 
@@ -363,40 +317,20 @@ impl<T: Real> Berg<T> {
         Ok(Self {
             f_max: T::from_f64(f_max),
             x2: T::from_f64(x2),
+            inv_x2: T::from_f64(1.0 / x2),
             inv_f_max: T::from_f64(1.0 / f_max),
         })
     }
 }
 
-impl<T: Real> Effect<T> for Berg<T> {
-    type State = CellState<T>;
-    type Report = EffectOutput<T>;
-    fn fraction(&self) -> f64 {
-        0.0
+impl<T: Real> Berg<T> {
+    fn rest_slope(&self) -> T {
+        self.f_max * self.inv_x2
     }
-    fn dt(&self) -> Option<f64> {
-        None
-    }
-    fn rest(&self, x0: T) -> CellState<T> {
-        CellState {
-            x: x0,
-            x_turn: x0,
-            slope: self.f_max / self.x2,
-            ..CellState::default()
-        }
-    }
-    #[inline]
-    fn step(&self, st: &mut CellState<T>, drive: &Drive<T>) -> EffectOutput<T> {
+    /// One step of travel `xi` in direction `s`.
+    #[inline(always)]
+    fn advance(&self, st: &mut CellState<T>, drive: &Drive<T>, s: T, xi: T) -> EffectOutput<T> {
         let x = drive.x;
-        let dx = x - st.x;
-        let s = direction(dx);
-        if s == T::ZERO {
-            return EffectOutput {
-                force: st.force,
-                tangent: st.slope,
-                dissipated: T::ZERO,
-            };
-        }
         let dir: i8 = if s > T::ZERO { 1 } else { -1 };
         if st.dir != 0 && dir != st.dir {
             st.x_turn = st.x;
@@ -406,14 +340,14 @@ impl<T: Real> Effect<T> for Berg<T> {
         let c = self.x2 * m * self.inv_f_max;
         let d0 = (st.x - st.x_turn).abs();
         let d1 = (x - st.x_turn).abs();
-        let den = c + d1;
-        let force = st.f_turn + s * m * d1 / den;
-        let slope = m * c / (den * den);
-        let density = |d: T| {
-            let q = d / (c + d);
-            T::HALF * m * q * q
-        };
-        let dissipated = T::HALF * dx.abs() * (density(d0) + density(d1));
+        // The only divisions of the three cells' explicit updates, by
+        // c + d >= c = x_2 (1 - |F_T| / F_fmax) > 0.
+        let q0 = d0 / (c + d0);
+        let inv_den = T::ONE / (c + d1);
+        let q1 = d1 * inv_den;
+        let force = st.f_turn + s * m * q1;
+        let slope = m * c * inv_den * inv_den;
+        let dissipated = T::HALF * xi * T::HALF * m * (q0 * q0 + q1 * q1);
         st.x = x;
         st.force = force;
         st.slope = slope;
@@ -424,11 +358,52 @@ impl<T: Real> Effect<T> for Berg<T> {
             dissipated,
         }
     }
-    #[inline(always)]
-    fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
-        *report
-    }
 }
+
+/// The [`Effect`] impl the three cells share: no fraction, no time step, a
+/// relaxed state at x0 with the slope at rest, and a step that holds the
+/// force when x does not move and otherwise advances by the travel.
+macro_rules! single_cell_effect {
+    ($($cell:ident),*) => {$(
+        impl<T: Real> Effect<T> for $cell<T> {
+            type State = CellState<T>;
+            type Report = EffectOutput<T>;
+            fn fraction(&self) -> f64 {
+                0.0
+            }
+            fn dt(&self) -> Option<f64> {
+                None
+            }
+            fn rest(&self, x0: T) -> CellState<T> {
+                CellState {
+                    x: x0,
+                    x_turn: x0,
+                    slope: self.rest_slope(),
+                    ..CellState::default()
+                }
+            }
+            #[inline]
+            fn step(&self, st: &mut CellState<T>, drive: &Drive<T>) -> EffectOutput<T> {
+                let dx = drive.x - st.x;
+                let s = direction(dx);
+                if s == T::ZERO {
+                    return EffectOutput {
+                        force: st.force,
+                        tangent: st.slope,
+                        dissipated: T::ZERO,
+                    };
+                }
+                self.advance(st, drive, s, dx.abs())
+            }
+            #[inline(always)]
+            fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
+                *report
+            }
+        }
+    )*};
+}
+
+single_cell_effect!(Dahl, BoucWen, Berg);
 
 #[cfg(test)]
 mod tests {

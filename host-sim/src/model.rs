@@ -283,19 +283,13 @@ pub fn build<T: Real>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
                     table = Some(TurningPoints::new(KfTable::new(d, k)?, *first_loading));
                 }
             },
-            EffectDesc::Friction(Friction::Dahl { k_d, f_f, alpha }) => {
-                dahl = Some(Dahl::new(*k_d, *f_f, *alpha)?);
+            EffectDesc::Friction(Friction::Dahl(p)) => {
+                dahl = Some(Dahl::new(p.k_d, p.f_f, p.alpha)?);
             }
-            EffectDesc::Friction(Friction::BoucWen {
-                alpha,
-                a,
-                beta,
-                gamma,
-                n,
-            }) => bouc_wen = Some(BoucWen::new(*alpha, *a, *beta, *gamma, *n)?),
-            EffectDesc::Friction(Friction::Berg { f_max, x2 }) => {
-                berg = Some(Berg::new(*f_max, *x2)?);
+            EffectDesc::Friction(Friction::BoucWen(p)) => {
+                bouc_wen = Some(BoucWen::new(p.alpha, p.a, p.beta, p.gamma, p.n)?);
             }
+            EffectDesc::Friction(Friction::Berg(p)) => berg = Some(Berg::new(p.f_max, p.x2)?),
         }
     }
     Bushing::new(
@@ -341,9 +335,9 @@ pub fn effect_outputs<T: Real>(
                 law: Law::Table { .. },
                 ..
             } => *table,
-            EffectDesc::Friction(Friction::Dahl { .. }) => *dahl,
-            EffectDesc::Friction(Friction::BoucWen { .. }) => *bouc_wen,
-            EffectDesc::Friction(Friction::Berg { .. }) => *berg,
+            EffectDesc::Friction(Friction::Dahl(_)) => *dahl,
+            EffectDesc::Friction(Friction::BoucWen(_)) => *bouc_wen,
+            EffectDesc::Friction(Friction::Berg(_)) => *berg,
         })
         .collect()
 }

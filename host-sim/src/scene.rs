@@ -143,35 +143,50 @@ pub enum EffectSpec {
         cells: Vec<XfCellToml>,
     },
     /// Dahl's friction cell (eq 1.43).
-    Dahl {
-        /// Initial stiffness in N/mm.
-        k_d: f64,
-        /// Friction force in N.
-        f_f: f64,
-        /// Exponent (default 1).
-        #[serde(default = "default_exponent")]
-        alpha: f64,
-    },
+    Dahl(DahlParams),
     /// The Bouc-Wen cell (eq 1.44, the thesis's naming).
-    BoucWen {
-        /// Force scale in N/mm.
-        alpha: f64,
-        /// A.
-        a: f64,
-        /// β.
-        beta: f64,
-        /// γ, with |γ| < β.
-        gamma: f64,
-        /// Exponent n.
-        n: f64,
-    },
+    BoucWen(BoucWenParams),
     /// Berg's friction cell (eq 1.45).
-    Berg {
-        /// Largest friction force in N.
-        f_max: f64,
-        /// Displacement in mm at which half of it is reached from rest.
-        x2: f64,
-    },
+    Berg(BergParams),
+}
+
+/// Parameters of a Dahl cell.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DahlParams {
+    /// Initial stiffness in N/mm.
+    pub k_d: f64,
+    /// Friction force in N.
+    pub f_f: f64,
+    /// Exponent (default 1).
+    #[serde(default = "default_exponent")]
+    pub alpha: f64,
+}
+
+/// Parameters of a Bouc-Wen cell.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoucWenParams {
+    /// Force scale in N/mm.
+    pub alpha: f64,
+    /// A.
+    pub a: f64,
+    /// β.
+    pub beta: f64,
+    /// γ, with |γ| < β.
+    pub gamma: f64,
+    /// Exponent n.
+    pub n: f64,
+}
+
+/// Parameters of a Berg cell.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BergParams {
+    /// Largest friction force in N.
+    pub f_max: f64,
+    /// Displacement in mm at which half of it is reached from rest.
+    pub x2: f64,
 }
 
 fn default_exponent() -> f64 {
@@ -220,9 +235,9 @@ impl EffectSpec {
             Self::Iwan { .. } => "iwan",
             Self::TurningPoints { .. } => "turning-points",
             Self::Xf { .. } => "xf",
-            Self::Dahl { .. } => "dahl",
-            Self::BoucWen { .. } => "bouc-wen",
-            Self::Berg { .. } => "berg",
+            Self::Dahl(_) => "dahl",
+            Self::BoucWen(_) => "bouc-wen",
+            Self::Berg(_) => "berg",
         }
     }
 }
@@ -372,34 +387,11 @@ pub enum Effect {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Friction {
     /// Dahl (eq 1.43).
-    Dahl {
-        /// Initial stiffness, N/mm.
-        k_d: f64,
-        /// Friction force, N.
-        f_f: f64,
-        /// Exponent.
-        alpha: f64,
-    },
+    Dahl(DahlParams),
     /// Bouc-Wen (eq 1.44).
-    BoucWen {
-        /// Force scale, N/mm.
-        alpha: f64,
-        /// A.
-        a: f64,
-        /// β.
-        beta: f64,
-        /// γ.
-        gamma: f64,
-        /// n.
-        n: f64,
-    },
+    BoucWen(BoucWenParams),
     /// Berg (eq 1.45).
-    Berg {
-        /// Largest friction force, N.
-        f_max: f64,
-        /// Half-force displacement, mm.
-        x2: f64,
-    },
+    Berg(BergParams),
 }
 
 impl Effect {
@@ -418,9 +410,9 @@ impl Effect {
                 Law::Table { d, .. } => format!("turning-points table x{}", d.len()),
             },
             Self::Xf { form, cells } => format!("xf {} x{}", form.name(), cells.len()),
-            Self::Friction(Friction::Dahl { alpha, .. }) => format!("dahl alpha={alpha}"),
-            Self::Friction(Friction::BoucWen { n, .. }) => format!("bouc-wen n={n}"),
-            Self::Friction(Friction::Berg { .. }) => "berg".into(),
+            Self::Friction(Friction::Dahl(p)) => format!("dahl alpha={}", p.alpha),
+            Self::Friction(Friction::BoucWen(p)) => format!("bouc-wen n={}", p.n),
+            Self::Friction(Friction::Berg(_)) => "berg".into(),
         }
     }
 
@@ -671,29 +663,18 @@ fn validate_effect(spec: EffectSpec, dt: f64, k_at_rest: f64) -> Result<Effect, 
             }
             Ok(Effect::Xf { form, cells })
         }
-        EffectSpec::Dahl { k_d, f_f, alpha } => {
-            bushing::Dahl::<f64>::new(k_d, f_f, alpha).map_err(|e| e.to_string())?;
-            Ok(Effect::Friction(Friction::Dahl { k_d, f_f, alpha }))
+        EffectSpec::Dahl(p) => {
+            bushing::Dahl::<f64>::new(p.k_d, p.f_f, p.alpha).map_err(|e| e.to_string())?;
+            Ok(Effect::Friction(Friction::Dahl(p)))
         }
-        EffectSpec::BoucWen {
-            alpha,
-            a,
-            beta,
-            gamma,
-            n,
-        } => {
-            bushing::BoucWen::<f64>::new(alpha, a, beta, gamma, n).map_err(|e| e.to_string())?;
-            Ok(Effect::Friction(Friction::BoucWen {
-                alpha,
-                a,
-                beta,
-                gamma,
-                n,
-            }))
+        EffectSpec::BoucWen(p) => {
+            bushing::BoucWen::<f64>::new(p.alpha, p.a, p.beta, p.gamma, p.n)
+                .map_err(|e| e.to_string())?;
+            Ok(Effect::Friction(Friction::BoucWen(p)))
         }
-        EffectSpec::Berg { f_max, x2 } => {
-            bushing::Berg::<f64>::new(f_max, x2).map_err(|e| e.to_string())?;
-            Ok(Effect::Friction(Friction::Berg { f_max, x2 }))
+        EffectSpec::Berg(p) => {
+            bushing::Berg::<f64>::new(p.f_max, p.x2).map_err(|e| e.to_string())?;
+            Ok(Effect::Friction(Friction::Berg(p)))
         }
     }
 }
