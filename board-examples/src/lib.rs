@@ -6,9 +6,9 @@
 use core::f64::consts::PI;
 
 use bushing::{
-    Backbone, Berg, BoucWen, Bushing, Compensated, Dahl, Effect, FirstLoading, IwanBank,
-    IwanCellSpec, IwanSliders, MaxwellBank, MaxwellForm, MaxwellSpec, MonotoneSpline, Oscillator,
-    ParamError, Polynomial, Sts, TurningPoints, XfBank, XfForm, XfSpec,
+    Backbone, Berg, BoucWen, Bushing, Compensated, Dahl, Effect, FirstLoading, FractionalSpec,
+    Grunwald, IwanBank, IwanCellSpec, IwanSliders, MaxwellBank, MaxwellForm, MaxwellSpec,
+    MonotoneSpline, Oscillator, ParamError, Polynomial, Sts, TurningPoints, XfBank, XfForm, XfSpec,
 };
 
 /// Control period of the probes: 2 kHz.
@@ -120,6 +120,31 @@ pub fn bouc_wen(n: f64) -> Result<Single<BoucWen<f32>>, ParamError> {
 /// A Berg cell (12 N, half of it at 0.05 mm).
 pub fn berg() -> Result<Single<Berg<f32>>, ParamError> {
     Bushing::new(polynomial()?, (Berg::new(12.0, 0.05)?,))
+}
+
+/// A fractional cell (α = 0.5, f_c = 1 Hz, g = 0.6) with `N` Grünwald taps.
+pub fn grunwald<const N: usize>() -> Result<Single<Grunwald<f32, N>>, ParamError> {
+    Bushing::new(
+        polynomial()?,
+        (Grunwald::new(FractionalSpec::hz(1.0, 0.5, 0.6), DT)?,),
+    )
+}
+
+/// Eight exact-ramp Maxwell cells, two per decade from 0.01 to 100 Hz: the
+/// size of a bank fitted to a fractional model within 1 % over four decades.
+pub fn maxwell8() -> Result<Single<MaxwellBank<f32, 8>>, ParamError> {
+    // 10^(4/7): eight corners spanning four decades.
+    const RATIO: f64 = 3.727_593_720_314_94;
+    let mut cells = [MaxwellSpec::new(1.0, 0.05); 8];
+    let mut f = 0.01;
+    for c in &mut cells {
+        *c = MaxwellSpec::hz(f, 0.07);
+        f *= RATIO;
+    }
+    Bushing::new(
+        polynomial()?,
+        (MaxwellBank::new(MaxwellForm::RateExactRamp, &cells, DT)?,),
+    )
 }
 
 /// The continuous STS law on a 16-deep turning-point stack.

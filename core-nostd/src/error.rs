@@ -120,6 +120,20 @@ pub enum ParamError {
         /// Upper end.
         hi: f64,
     },
+    /// The value must lie in `[min, max]` (`min` itself excluded when
+    /// `min_open`).
+    OutOfRange {
+        /// Offending parameter.
+        param: Param,
+        /// Value given.
+        value: f64,
+        /// Lower bound.
+        min: f64,
+        /// Whether the lower bound itself is refused.
+        min_open: bool,
+        /// Upper bound (included).
+        max: f64,
+    },
     /// Effects built for different time steps were put in one bushing.
     TimeStepMismatch {
         /// Time step of the first effect.
@@ -167,6 +181,16 @@ impl fmt::Display for ParamError {
                 write!(f, "backbone tangent is not provably positive near x = {x}")
             }
             Self::EmptyRange { lo, hi } => write!(f, "range [{lo}, {hi}] is empty"),
+            Self::OutOfRange {
+                param,
+                value,
+                min,
+                min_open,
+                max,
+            } => {
+                let open = if min_open { "(" } else { "[" };
+                write!(f, "{param} = {value} is outside {open}{min}, {max}]")
+            }
             Self::TimeStepMismatch { first, other } => write!(
                 f,
                 "effects built for different time steps: {first} s and {other} s"

@@ -8,6 +8,8 @@
 //! modulus of the Maxwell forms against the closed form.
 #![forbid(unsafe_code)]
 
+pub mod fit;
+pub mod fractional_report;
 pub mod iwan_report;
 pub mod model;
 pub mod modulus;

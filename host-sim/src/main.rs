@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use bushing_sim::{Scene, iwan_report, modulus, run, xf_report};
+use bushing_sim::{Scene, fractional_report, iwan_report, modulus, run, xf_report};
 
 const USAGE: &str = "\
 usage:
@@ -11,6 +11,7 @@ usage:
   bushing-sim maxwell-table [--out FILE]   complex-modulus error of every Maxwell form
   bushing-sim xf-table [--out FILE]        saturation of the x_f cell forms against the step
   bushing-sim iwan-table [--out FILE]      Iwan discretisations of the STS and Segalman laws
+  bushing-sim fractional-table [--out FILE]  Grünwald accuracy, Maxwell fits and their cost
   bushing-sim help";
 
 fn main() -> ExitCode {
@@ -24,6 +25,17 @@ fn main() -> ExitCode {
     }
 }
 
+/// The generated reports, by command name.
+fn report(name: &str) -> Option<fn() -> String> {
+    match name {
+        "maxwell-table" => Some(modulus::table),
+        "xf-table" => Some(xf_report::table),
+        "iwan-table" => Some(iwan_report::table),
+        "fractional-table" => Some(fractional_report::table),
+        _ => None,
+    }
+}
+
 fn dispatch(args: &[String]) -> Result<(), String> {
     let words: Vec<&str> = args.iter().map(String::as_str).collect();
     match words.as_slice() {
@@ -33,31 +45,15 @@ fn dispatch(args: &[String]) -> Result<(), String> {
             print!("{summary}");
             Ok(())
         }
-        ["maxwell-table"] => {
-            print!("{}", modulus::table());
-            Ok(())
-        }
-        ["maxwell-table", "--out", file] => {
-            std::fs::write(file, modulus::table()).map_err(|e| format!("{file}: {e}"))?;
-            println!("wrote {file}");
-            Ok(())
-        }
-        ["iwan-table"] => {
-            print!("{}", iwan_report::table());
-            Ok(())
-        }
-        ["iwan-table", "--out", file] => {
-            std::fs::write(file, iwan_report::table()).map_err(|e| format!("{file}: {e}"))?;
-            println!("wrote {file}");
-            Ok(())
-        }
-        ["xf-table"] => {
-            print!("{}", xf_report::table());
-            Ok(())
-        }
-        ["xf-table", "--out", file] => {
-            std::fs::write(file, xf_report::table()).map_err(|e| format!("{file}: {e}"))?;
-            println!("wrote {file}");
+        [name] | [name, "--out", _] if report(name).is_some() => {
+            let text = report(name).map(|f| f()).unwrap_or_default();
+            match words.as_slice() {
+                [_, "--out", file] => {
+                    std::fs::write(file, text).map_err(|e| format!("{file}: {e}"))?;
+                    println!("wrote {file}");
+                }
+                _ => print!("{text}"),
+            }
             Ok(())
         }
         ["help"] | ["--help"] | ["-h"] => {

@@ -10,8 +10,9 @@ mod firmware {
     use bushing::MaxwellForm;
     use bushing::XfForm;
     use bushing_boards::{
-        berg, bouc_wen, composite, dahl, iwan_oscillator, iwan4, maxwell4, maxwell4_compensated,
-        polynomial, run, run_oscillator, sliders4, spline, sts16, triangle, xf2,
+        berg, bouc_wen, composite, dahl, grunwald, iwan_oscillator, iwan4, maxwell4,
+        maxwell4_compensated, maxwell8, polynomial, run, run_oscillator, sliders4, spline, sts16,
+        triangle, xf2,
     };
     use cortex_m::peripheral::{SYST, syst::SystClkSource};
     use cortex_m_rt::entry;
@@ -116,6 +117,15 @@ mod firmware {
         let Ok(b) = composite() else { fail() };
         let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
         report("3 Maxwell + 3 Jenkins + 1 x_f", t);
+        let Ok(b) = maxwell8() else { fail() };
+        let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+        report("rate-exact-ramp, 8 cells", t);
+        let Ok(b) = grunwald::<64>() else { fail() };
+        let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+        report("Grünwald fractional cell, N = 64", t);
+        let Ok(b) = grunwald::<1024>() else { fail() };
+        let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
+        report("Grünwald fractional cell, N = 1024", t);
         let Ok(b) = sts16() else { fail() };
         let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
         report("STS on a 16-deep turning-point stack", t);
