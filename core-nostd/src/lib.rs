@@ -73,6 +73,7 @@ pub mod maxwell;
 pub mod oscillator;
 pub mod real;
 pub mod stack;
+pub mod temperature;
 pub mod xf;
 
 pub use accumulator::{Accumulator, Compensated, Plain};
@@ -86,4 +87,5 @@ pub use maxwell::{MaxwellBank, MaxwellCell, MaxwellForm, MaxwellSpec};
 pub use oscillator::{Oscillator, OscillatorState, OscillatorStep};
 pub use real::Real;
 pub use stack::{FirstLoading, KfTable, Relaxation, StackState, Sts, TurningPoints};
+pub use temperature::ShiftFactor;
 pub use xf::{XfBank, XfForm, XfSpec};

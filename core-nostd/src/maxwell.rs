@@ -258,6 +258,7 @@ pub fn step_cells<T: Real, A: Accumulator<T>>(
 #[derive(Debug, Clone, PartialEq)]
 pub struct MaxwellBank<T, const N: usize, A = Plain<T>> {
     form: MaxwellForm,
+    specs: [MaxwellSpec; N],
     cells: [MaxwellCell<T>; N],
     tangent_gain: T,
     fraction: f64,
@@ -279,12 +280,34 @@ impl<T: Real, const N: usize, A: Accumulator<T>> MaxwellBank<T, N, A> {
         }
         Ok(Self {
             form,
+            specs: *specs,
             tangent_gain: tangent_gain(&cells),
             cells,
             fraction,
             dt,
             acc: PhantomData,
         })
+    }
+
+    /// The cells' parameters.
+    pub fn specs(&self) -> &[MaxwellSpec; N] {
+        &self.specs
+    }
+
+    /// The same bank at another temperature: every corner frequency divided
+    /// by the shift factor `a_t` (seed 000 eqs 1.46-1.48, with the usual
+    /// a_T > 1 on the cold, slow side; see [`crate::temperature`]). The
+    /// coefficients are recomputed as at construction (f64, `expm1`).
+    ///
+    /// The state of a running bank carries over unchanged: it holds branch
+    /// forces (rate forms) or relaxations (load forms), not coefficients, so
+    /// swapping the bank between two steps leaves the force continuous.
+    /// Shifts compose: `b.shifted(a)?.shifted(c)` equals `b.shifted(a c)`
+    /// up to rounding; to return to the reference, shift the original bank.
+    pub fn shifted(&self, a_t: f64) -> Result<Self, ParamError> {
+        let a_t = positive(Param::scalar("a_t"), a_t)?;
+        let specs = self.specs.map(|s| MaxwellSpec::new(s.omega / a_t, s.g));
+        Self::new(self.form, &specs, self.dt)
     }
 
     /// The form of every cell.

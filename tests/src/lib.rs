@@ -12,7 +12,8 @@ use core::fmt;
 use bushing::{
     Backbone, Berg, BoucWen, Bushing, Compensated, Dahl, Effect, EffectOutput, Faults,
     FractionalSpec, Grunwald, IwanBank, IwanCellSpec, IwanSliders, MaxwellBank, MaxwellForm,
-    MaxwellSpec, MonotoneSpline, Oscillator, ParamError, Polynomial, Real, XfBank, XfForm, XfSpec,
+    MaxwellSpec, MonotoneSpline, Oscillator, ParamError, Polynomial, Real, ShiftFactor, XfBank,
+    XfForm, XfSpec,
     stack::{FirstLoading, Relaxation, Sts, TurningPoints},
 };
 
@@ -133,6 +134,10 @@ pub const CASES: &[Case] = &[
     ),
     ("golden_trace_friction_f32", golden_trace_friction_f32),
     ("grunwald_steady_modulus_f32", grunwald_modulus_f32),
+    (
+        "temperature_retune_continuous_and_shifted_f32",
+        temperature_retune_f32,
+    ),
 ];
 
 /// Runs every case, printing one line each and the closing
@@ -818,6 +823,64 @@ fn grunwald_modulus_f32() -> CaseResult {
     at_most(
         "energy per cycle vs pi K'' x^2",
         libm::fabs(energy / (core::f64::consts::PI * k * im) - 1.0),
+        5e-3,
+    )
+}
+
+fn temperature_retune_f32() -> CaseResult {
+    // A 4-cell bank at 20 °C re-tuned to 10 °C (Arrhenius, E_a/R = 8000 K)
+    // mid-period: no jump larger than one ordinary step's change, then the
+    // steady modulus of eq 1.8 at the reduced frequency a_T ω within 0.5 %.
+    let (dt, per) = (1e-3f64, 200usize);
+    let specs = [
+        MaxwellSpec::hz(0.5, 0.1),
+        MaxwellSpec::hz(2.0, 0.15),
+        MaxwellSpec::hz(8.0, 0.15),
+        MaxwellSpec::hz(40.0, 0.1),
+    ];
+    let warm = MaxwellBank::<f32, 4>::new(MaxwellForm::RateExactRamp, &specs, dt).map_err(param)?;
+    let a_t = ShiftFactor::arrhenius(8000.0, 293.15)
+        .and_then(|law| law.at(283.15))
+        .map_err(param)?;
+    let cold = warm.shifted(a_t).map_err(param)?;
+    let k = Polynomial::<f32, 2>::linear(1.0).map_err(param)?;
+    let bw = Bushing::new(k, (warm,)).map_err(param)?;
+    let bc = Bushing::new(k, (cold,)).map_err(param)?;
+    let mut s = bw.state_at(0.0);
+    let x = |n: usize| libm::sin(core::f64::consts::TAU * (n % per) as f64 / per as f64);
+    let (mut largest, mut last) = (0.0f64, 0.0f64);
+    let n0 = 10 * per + per / 3;
+    for n in 1..=n0 {
+        let f = bw.step(&mut s, x(n) as f32).force as f64;
+        largest = largest.max(libm::fabs(f - last));
+        last = f;
+    }
+    let f = bc.step(&mut s, x(n0 + 1) as f32).force as f64;
+    at_most("force jump at the re-tune", libm::fabs(f - last), largest)?;
+    let periods = 40;
+    let (mut fr, mut fi) = (0.0f64, 0.0f64);
+    for n in n0 + 2..=n0 + 1 + periods * per {
+        let out = bc.step(&mut s, x(n) as f32);
+        if n > n0 + 1 + (periods - 1) * per {
+            let phase = core::f64::consts::TAU * (n % per) as f64 / per as f64;
+            fr += 2.0 * out.force as f64 * libm::sin(phase) / per as f64;
+            fi += 2.0 * out.force as f64 * libm::cos(phase) / per as f64;
+        }
+    }
+    let w = a_t * core::f64::consts::TAU / (dt * per as f64);
+    let g0 = 1.0 - specs.iter().map(|c| c.g).sum::<f64>();
+    let (s_ref, l_ref) = specs.iter().fold((g0, 0.0), |(s, l), c| {
+        let d = w * w + c.omega * c.omega;
+        (s + c.g * w * w / d, l + c.g * w * c.omega / d)
+    });
+    at_most(
+        "storage vs eq 1.8 at a_T w",
+        libm::fabs(fr / s_ref - 1.0),
+        5e-3,
+    )?;
+    at_most(
+        "loss vs eq 1.8 at a_T w",
+        libm::fabs(fi / l_ref - 1.0),
         5e-3,
     )
 }

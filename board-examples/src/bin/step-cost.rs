@@ -120,6 +120,22 @@ mod firmware {
         let Ok(b) = maxwell8() else { fail() };
         let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
         report("rate-exact-ramp, 8 cells", t);
+        // Re-tuning a running 8-cell bank to another temperature: one
+        // f64 expm1 and exp per cell (soft-float on this core).
+        let bank = &b.effects().0;
+        let t = ticks(&mut syst, || {
+            for k in 0..STEPS {
+                let a_t = 1.0 + core::hint::black_box(k as f64) * 1e-3;
+                let _ = core::hint::black_box(bank.shifted(a_t));
+            }
+        });
+        let tenths = t * INSTRUCTIONS_PER_TICK * 10 / STEPS as u32;
+        hprintln!(
+            "{:<44} {:>5}.{} instructions/call",
+            "re-tune 8 Maxwell cells (libm f64)",
+            tenths / 10,
+            tenths % 10
+        );
         let Ok(b) = grunwald::<64>() else { fail() };
         let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
         report("Grünwald fractional cell, N = 64", t);
