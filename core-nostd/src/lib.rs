@@ -15,7 +15,12 @@
 //! Iwan, into banks of Jenkins cells; [`friction`] holds the Dahl, Bouc-Wen
 //! and Berg cells the thesis compares them with. A [`Bushing`] joins them;
 //! effects compose as tuples at compile time, so an effect a firmware build
-//! does not name costs nothing. [`oscillator`] integrates a unit-mass mode
+//! does not name costs nothing. [`fractional`] holds the order-independent
+//! fractional-derivative cell (truncated Grünwald sum), which the host crate
+//! replaces by a fitted Maxwell bank for firmware; [`temperature`] shifts the
+//! viscoelastic corners with the temperature (WLF, Arrhenius) and
+//! [`MaxwellBank::shifted`] re-tunes a running bank. [`oscillator`]
+//! integrates a unit-mass mode
 //! whose restoring force is any bushing (the Iwan oscillator of the joint
 //! thesis, "seed 004").
 //!
