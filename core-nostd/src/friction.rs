@@ -36,6 +36,20 @@ impl<T: Real> CellState<T> {
     pub fn force(&self) -> T {
         self.force
     }
+
+    /// Commits a step that reached `x` with `force` and `slope`, and
+    /// reports it.
+    #[inline(always)]
+    fn commit(&mut self, x: T, force: T, slope: T, dissipated: T) -> EffectOutput<T> {
+        self.x = x;
+        self.force = force;
+        self.slope = slope;
+        EffectOutput {
+            force,
+            tangent: slope,
+            dissipated,
+        }
+    }
 }
 
 fn direction<T: Real>(dx: T) -> T {
@@ -132,14 +146,8 @@ impl<T: Real> Dahl<T> {
             (T::ONE - u1) * (T::ONE - self.pow_alpha(u1)),
         );
         let slope = self.k_d * self.pow_alpha(u1);
-        st.x = drive.x;
-        st.force = force;
-        st.slope = slope;
-        EffectOutput {
-            force,
-            tangent: slope,
-            dissipated: T::HALF * xi * self.f_f * (p0 + p1),
-        }
+        let dissipated = T::HALF * xi * self.f_f * (p0 + p1);
+        st.commit(drive.x, force, slope, dissipated)
     }
 }
 
@@ -270,14 +278,7 @@ impl<T: Real> BoucWen<T> {
         let density = |w: T, c: T, p: T| w * c * p;
         let dissipated =
             T::HALF * xi * self.alpha_over_a * (density(w0, c0, p0) + density(w, c1, p1));
-        st.x = drive.x;
-        st.force = force;
-        st.slope = slope;
-        EffectOutput {
-            force,
-            tangent: slope,
-            dissipated,
-        }
+        st.commit(drive.x, force, slope, dissipated)
     }
 }
 
@@ -348,15 +349,8 @@ impl<T: Real> Berg<T> {
         let force = st.f_turn + s * m * q1;
         let slope = m * c * inv_den * inv_den;
         let dissipated = T::HALF * xi * T::HALF * m * (q0 * q0 + q1 * q1);
-        st.x = x;
-        st.force = force;
-        st.slope = slope;
         st.dir = dir;
-        EffectOutput {
-            force,
-            tangent: slope,
-            dissipated,
-        }
+        st.commit(x, force, slope, dissipated)
     }
 }
 
