@@ -45,6 +45,7 @@ cargo clippy --workspace --all-targets -- -D warnings
 
 step "lints (Cortex-M4F: core, suite, firmware)"
 cargo clippy -p bushing --target thumbv7em-none-eabihf -- -D warnings
+cargo clippy -p bushing --features micromath --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m -- -D warnings
 cargo clippy -p bushing-boards --target thumbv7em-none-eabihf --bins -- -D warnings
 

@@ -18,8 +18,10 @@
 //! does not name costs nothing. [`fractional`] holds the order-independent
 //! fractional-derivative cell (truncated Grünwald sum), which the host crate
 //! replaces by a fitted Maxwell bank for firmware; [`temperature`] shifts the
-//! viscoelastic corners with the temperature (WLF, Arrhenius) and
-//! [`MaxwellBank::shifted`] re-tunes a running bank. [`oscillator`]
+//! viscoelastic corners with the temperature (WLF, Arrhenius);
+//! [`MaxwellBank::shifted`] re-tunes a running bank in f64 and
+//! [`MaxwellBank::retune`] on line in the working type, with the
+//! [`Exponentials`] of libm or (feature `micromath`) micromath. [`oscillator`]
 //! integrates a unit-mass mode
 //! whose restoring force is any bushing (the Iwan oscillator of the joint
 //! thesis, "seed 004").
@@ -29,7 +31,8 @@
 //! - Parameters are validated at construction (`Result<_, ParamError>`, a
 //!   variant per broken rule) and immutable; every coefficient is computed
 //!   there in `f64` (exponentials with `expm1`) and stored in the working
-//!   type `T: Real` (`f32` or `f64`).
+//!   type `T: Real` (`f32` or `f64`); only an explicit on-line re-tune
+//!   ([`MaxwellBank::retune`]) recomputes them in the working type.
 //! - State is plain data apart from the parameters:
 //!   `params.step(&mut state, x) -> Output`, and the pure
 //!   `params.trial(&state, x) -> (Output, State)` beside it.
@@ -90,7 +93,9 @@ pub use friction::{Berg, BoucWen, Dahl};
 pub use iwan::{IwanBank, IwanCellSpec, IwanSliders};
 pub use maxwell::{MaxwellBank, MaxwellCell, MaxwellForm, MaxwellSpec};
 pub use oscillator::{Oscillator, OscillatorState, OscillatorStep};
-pub use real::Real;
+#[cfg(feature = "micromath")]
+pub use real::MicromathExp;
+pub use real::{Exponentials, LibmExp, Real};
 pub use stack::{FirstLoading, KfTable, Relaxation, StackState, Sts, TurningPoints};
 pub use temperature::ShiftFactor;
 pub use xf::{XfBank, XfForm, XfSpec};

@@ -52,7 +52,7 @@ use core::marker::PhantomData;
 use crate::accumulator::{Accumulator, Plain};
 use crate::bushing::{Drive, Effect, EffectOutput};
 use crate::error::{Param, ParamError, positive};
-use crate::real::Real;
+use crate::real::{Exponentials, LibmExp, Real};
 
 /// The discrete form of a Maxwell cell (see the module table).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -169,30 +169,14 @@ impl<T: Real> MaxwellCell<T> {
                 param: Param::item("omega", index),
             });
         }
-        if form.is_explicit() && h >= 1.0 {
-            return Err(ParamError::ExplicitUnstable {
-                cell: index,
-                omega_dt: h,
-            });
-        }
-        let one_minus_a = -libm::expm1(-h);
-        let mid = libm::exp(-0.5 * h);
-        let (decay, p, q) = match form {
-            MaxwellForm::LoadExplicit => (h, 0.0, -h * g),
-            MaxwellForm::LoadExponential => (one_minus_a, 0.5 * h * g * mid, -h * g * mid),
-            MaxwellForm::RateExplicit => (h, g, 0.0),
-            MaxwellForm::RateMidpoint => (one_minus_a, g * mid, 0.0),
-            MaxwellForm::RateExactRamp => (one_minus_a, g * one_minus_a / h, 0.0),
-        };
-        // dF_branch/dF^inf_n: p + q, plus g for the load forms.
-        let tangent = p + q + if form.is_load() { g } else { 0.0 };
+        let c = coefficients::<f64, LibmExp>(form, h, g, index)?;
         Ok(Self {
-            decay: T::from_f64(decay),
-            rate_gain: T::from_f64(p),
-            level_gain: T::from_f64(q),
+            decay: T::from_f64(c.decay),
+            rate_gain: T::from_f64(c.rate_gain),
+            level_gain: T::from_f64(c.level_gain),
             g: T::from_f64(g),
-            loss: T::from_f64(h / g),
-            tangent,
+            loss: T::from_f64(c.loss),
+            tangent: c.tangent,
         })
     }
 
@@ -200,6 +184,47 @@ impl<T: Real> MaxwellCell<T> {
     pub fn tangent_share(&self) -> f64 {
         self.tangent
     }
+}
+
+/// The one formula of the module table: the coefficients for
+/// `h = ω dt > 0` and fraction `g`, formed in `U` with the exponentials
+/// `E` (f64 and libm at construction, the working type at a re-tune).
+fn coefficients<U: Real, E: Exponentials<U>>(
+    form: MaxwellForm,
+    h: U,
+    g: U,
+    index: usize,
+) -> Result<MaxwellCell<U>, ParamError> {
+    if form.is_explicit() && h >= U::ONE {
+        return Err(ParamError::ExplicitUnstable {
+            cell: index,
+            omega_dt: h.to_f64(),
+        });
+    }
+    let mid = || E::exp(-(U::HALF * h));
+    let (decay, p, q) = match form {
+        MaxwellForm::LoadExplicit => (h, U::ZERO, -h * g),
+        MaxwellForm::LoadExponential => {
+            let m = mid();
+            (E::one_minus_exp_neg(h), U::HALF * h * g * m, -h * g * m)
+        }
+        MaxwellForm::RateExplicit => (h, g, U::ZERO),
+        MaxwellForm::RateMidpoint => (E::one_minus_exp_neg(h), g * mid(), U::ZERO),
+        MaxwellForm::RateExactRamp => {
+            let d = E::one_minus_exp_neg(h);
+            (d, g * d / h, U::ZERO)
+        }
+    };
+    // dF_branch/dF^inf_n: p + q, plus g for the load forms.
+    let tangent = p + q + if form.is_load() { g } else { U::ZERO };
+    Ok(MaxwellCell {
+        decay,
+        rate_gain: p,
+        level_gain: q,
+        g,
+        loss: h / g,
+        tangent: tangent.to_f64(),
+    })
 }
 
 /// Sum of the cells' tangent shares, in the working type.
@@ -258,7 +283,12 @@ pub fn step_cells<T: Real, A: Accumulator<T>>(
 #[derive(Debug, Clone, PartialEq)]
 pub struct MaxwellBank<T, const N: usize, A = Plain<T>> {
     form: MaxwellForm,
+    /// The cells at the reference temperature, as given.
     specs: [MaxwellSpec; N],
+    /// ω_i dt at the reference temperature, in the working type.
+    h_ref: [T; N],
+    /// The shift factor a_T the cells are tuned to.
+    shift: T,
     cells: [MaxwellCell<T>; N],
     tangent_gain: T,
     fraction: f64,
@@ -269,10 +299,25 @@ pub struct MaxwellBank<T, const N: usize, A = Plain<T>> {
 impl<T: Real, const N: usize, A: Accumulator<T>> MaxwellBank<T, N, A> {
     /// Builds the bank for time step `dt` (seconds).
     pub fn new(form: MaxwellForm, specs: &[MaxwellSpec; N], dt: f64) -> Result<Self, ParamError> {
+        Self::tuned(form, specs, dt, 1.0)
+    }
+
+    /// The bank of `specs` (at the reference temperature) tuned to the
+    /// shift factor `a_t`, every coefficient computed in f64.
+    fn tuned(
+        form: MaxwellForm,
+        specs: &[MaxwellSpec; N],
+        dt: f64,
+        a_t: f64,
+    ) -> Result<Self, ParamError> {
+        let a_t = positive(Param::scalar("a_t"), a_t)?;
         let mut cells = [MaxwellCell::default(); N];
+        let mut h_ref = [T::ZERO; N];
         let mut fraction = 0.0;
-        for (i, (cell, spec)) in cells.iter_mut().zip(specs).enumerate() {
-            *cell = MaxwellCell::new(form, *spec, dt, i)?;
+        for (i, ((cell, h), spec)) in cells.iter_mut().zip(&mut h_ref).zip(specs).enumerate() {
+            let shifted = MaxwellSpec::new(spec.omega / a_t, spec.g);
+            *cell = MaxwellCell::new(form, shifted, dt, i)?;
+            *h = T::from_f64(spec.omega * dt);
             fraction += spec.g;
         }
         if fraction > 1.0 + 1e-12 {
@@ -281,6 +326,8 @@ impl<T: Real, const N: usize, A: Accumulator<T>> MaxwellBank<T, N, A> {
         Ok(Self {
             form,
             specs: *specs,
+            h_ref,
+            shift: T::from_f64(a_t),
             tangent_gain: tangent_gain(&cells),
             cells,
             fraction,
@@ -289,30 +336,115 @@ impl<T: Real, const N: usize, A: Accumulator<T>> MaxwellBank<T, N, A> {
         })
     }
 
-    /// The cells' parameters.
+    /// The cells' parameters at the reference temperature, as given.
     pub fn specs(&self) -> &[MaxwellSpec; N] {
         &self.specs
     }
 
-    /// The same bank at another temperature: every corner frequency divided
-    /// by the shift factor `a_t` (seed 000 eqs 1.46-1.48, with the usual
-    /// a_T > 1 on the cold, slow side; see [`crate::temperature`]). The
-    /// coefficients are recomputed as at construction (f64, `expm1`).
+    /// The shift factor a_T the cells are tuned to (1 as built).
+    pub fn shift(&self) -> T {
+        self.shift
+    }
+
+    /// The same bank at another temperature: every reference corner
+    /// frequency divided by the shift factor `a_t` (seed 000 eqs 1.46-1.48,
+    /// with the usual a_T > 1 on the cold, slow side; see
+    /// [`crate::temperature`]). The shift is absolute (from the reference
+    /// specs, whatever the bank is tuned to now), so repeated re-tunes do
+    /// not drift; the coefficients are computed as at construction (f64,
+    /// `expm1`): exact, but soft-float on a Cortex-M4F (see [`Self::retune`]).
     ///
     /// The state of a running bank carries over unchanged: it holds branch
     /// forces (rate forms) or relaxations (load forms), not coefficients, so
     /// swapping the bank between two steps leaves the force continuous.
-    /// Shifts compose: `b.shifted(a)?.shifted(c)` equals `b.shifted(a c)`
-    /// up to rounding; to return to the reference, shift the original bank.
     pub fn shifted(&self, a_t: f64) -> Result<Self, ParamError> {
-        let a_t = positive(Param::scalar("a_t"), a_t)?;
-        let specs = self.specs.map(|s| MaxwellSpec::new(s.omega / a_t, s.g));
-        Self::new(self.form, &specs, self.dt)
+        Self::tuned(self.form, &self.specs, self.dt, a_t)
+    }
+
+    /// Re-tunes the bank in place to the shift factor `a_t` (absolute, as
+    /// [`Self::shifted`]), computing in the working type with the
+    /// exponentials `E` ([`LibmExp`], or `MicromathExp` with the
+    /// `micromath` feature): the on-line path of a firmware that follows a
+    /// temperature sensor, with no f64.
+    ///
+    /// Per cell: `h = h_ref / a_t`, one or two exponentials and two
+    /// divisions. Accuracy against [`Self::shifted`] in `f32`: libm within a
+    /// few ulps on every coefficient; micromath within its `exp` error
+    /// (2.4e-3 on e^-h, so the effective corner ln(1/(1-d))/dt moves by at
+    /// most 0.34 %, at h = ln 2; the series below h = 1/16 keeps f32
+    /// accuracy);
+    /// see `docs/fractional.md` for the table and the step-cost firmware
+    /// for the cost. On error (`a_t` not finite and positive, or a shifted
+    /// ω_i dt that overflows, vanishes or makes an explicit form unstable)
+    /// the bank is left as it was.
+    pub fn retune<E: Exponentials<T>>(&mut self, a_t: T) -> Result<(), ParamError> {
+        let param = Param::scalar("a_t");
+        if !a_t.is_finite() {
+            return Err(ParamError::NotFinite { param });
+        }
+        if a_t <= T::ZERO {
+            return Err(ParamError::NotPositive {
+                param,
+                value: a_t.to_f64(),
+            });
+        }
+        let mut cells = self.cells;
+        let mut gain = T::ZERO;
+        for (i, (cell, &h_ref)) in cells.iter_mut().zip(&self.h_ref).enumerate() {
+            let h = h_ref / a_t;
+            if !h.is_finite() {
+                return Err(ParamError::NotFinite {
+                    param: Param::item("omega", i),
+                });
+            }
+            if h <= T::ZERO {
+                return Err(ParamError::NotPositive {
+                    param: Param::item("omega", i),
+                    value: 0.0,
+                });
+            }
+            *cell = coefficients::<T, E>(self.form, h, cell.g, i)?;
+            gain += T::from_f64(cell.tangent);
+        }
+        self.cells = cells;
+        self.tangent_gain = gain;
+        self.shift = a_t;
+        Ok(())
     }
 
     /// The form of every cell.
     pub fn form(&self) -> MaxwellForm {
         self.form
+    }
+
+    /// Branch share of the complex stiffness over K^∞ of the discrete bank
+    /// at ω (rad/s), as (storage, loss): its exact steady-state response
+    /// with the coefficients as stored in `T`, `Σ_i H_i(e^{iω dt})` with
+    /// `H_i(z) = (p (1 - z^-1) + q) / (1 - (1 - d) z^-1)` (plus g_i for the
+    /// load forms, whose state is the relaxation). The static share
+    /// `1 - Σ g_i` is not included. f64 with libm trig: reports and tests.
+    pub fn branch_response(&self, omega: f64) -> (f64, f64) {
+        let theta = omega * self.dt;
+        let (c, s) = (libm::cos(theta), libm::sin(theta));
+        let mut sum = (0.0, 0.0);
+        for cell in &self.cells {
+            let (d, p, q) = (
+                cell.decay.to_f64(),
+                cell.rate_gain.to_f64(),
+                cell.level_gain.to_f64(),
+            );
+            // z^-1 = c - i s
+            let (num_re, num_im) = (p * (1.0 - c) + q, p * s);
+            let a = 1.0 - d;
+            let (den_re, den_im) = (1.0 - a * c, a * s);
+            let norm = den_re * den_re + den_im * den_im;
+            sum.0 += (num_re * den_re + num_im * den_im) / norm;
+            sum.1 += (num_im * den_re - num_re * den_im) / norm;
+            if self.form.is_load() {
+                sum.0 += cell.g.to_f64();
+            }
+        }
+        sum
     }
 
     /// Branch forces of a state, given the backbone force at its step.
@@ -527,5 +659,184 @@ mod tests {
         }
         let rate = -(f / f0).ln() / n as f64;
         assert!((rate / h - 1.0).abs() < 1e-3, "rate {rate}");
+    }
+
+    const FORMS: [MaxwellForm; 5] = [
+        MaxwellForm::LoadExplicit,
+        MaxwellForm::LoadExponential,
+        MaxwellForm::RateExplicit,
+        MaxwellForm::RateMidpoint,
+        MaxwellForm::RateExactRamp,
+    ];
+
+    /// Cells from ω dt = 1e-6 (slow) to 30 (explicit forms: up to 0.5).
+    fn wide_specs(form: MaxwellForm) -> [MaxwellSpec; 5] {
+        let top = if form.is_explicit() { 0.5 } else { 30.0 };
+        [1e-6, 1e-3, 0.05, 0.3, top].map(|h| MaxwellSpec::new(h * 1e3, 0.15))
+    }
+
+    fn coefficient_error<T: Real>(a: &MaxwellCell<T>, b: &MaxwellCell<T>) -> f64 {
+        let rel = |x: T, y: T| {
+            let (x, y) = (x.to_f64(), y.to_f64());
+            if x == y { 0.0 } else { ((x - y) / y).abs() }
+        };
+        [
+            rel(a.decay, b.decay),
+            rel(a.rate_gain, b.rate_gain),
+            rel(a.level_gain, b.level_gain),
+            rel(a.loss, b.loss),
+        ]
+        .into_iter()
+        .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn shifts_are_absolute_from_the_reference() {
+        let b = MaxwellBank::<f64, 3>::new(MaxwellForm::RateExactRamp, &SPECS, 1e-3).unwrap();
+        assert_eq!(b.shift(), 1.0);
+        let twice = b.shifted(2.0).unwrap().shifted(3.0).unwrap();
+        assert_eq!(twice, b.shifted(3.0).unwrap());
+        assert_eq!(twice.specs(), &SPECS);
+        assert_eq!(b.shifted(1.0).unwrap(), b);
+        // The shifted bank is the bank of the shifted corners.
+        let moved = SPECS.map(|s| MaxwellSpec::new(s.omega / 3.0, s.g));
+        let direct = MaxwellBank::<f64, 3>::new(MaxwellForm::RateExactRamp, &moved, 1e-3).unwrap();
+        assert_eq!(twice.cells, direct.cells);
+        assert_eq!(twice.tangent_gain, direct.tangent_gain);
+    }
+
+    #[test]
+    fn working_type_retune_matches_the_f64_shift() {
+        for form in FORMS {
+            let specs = wide_specs(form);
+            for a_t in [0.7, 1.0, 2.5, 40.0] {
+                // f64 with libm: the same formula, h formed as h_ref / a_t.
+                let mut b = MaxwellBank::<f64, 5>::new(form, &specs, 1e-3).unwrap();
+                let exact = b.shifted(a_t).unwrap();
+                b.retune::<LibmExp>(a_t).unwrap();
+                for (x, y) in b.cells.iter().zip(&exact.cells) {
+                    assert!(coefficient_error(x, y) < 1e-14, "{form:?} a_t={a_t}");
+                }
+                assert!((b.tangent_gain / exact.tangent_gain - 1.0).abs() < 1e-14);
+                assert_eq!(b.shift(), a_t);
+                // f32 with libm: within a few ulps of the rounded f64 path.
+                let mut b = MaxwellBank::<f32, 5>::new(form, &specs, 1e-3).unwrap();
+                let exact = b.shifted(a_t).unwrap();
+                b.retune::<LibmExp>(a_t as f32).unwrap();
+                for (x, y) in b.cells.iter().zip(&exact.cells) {
+                    let e = coefficient_error(x, y);
+                    assert!(e < 8.0 * f32::EPSILON as f64, "{form:?} a_t={a_t}: {e}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn refused_retunes_leave_the_bank_as_it_was() {
+        let mut b = MaxwellBank::<f32, 5>::new(
+            MaxwellForm::RateExplicit,
+            &wide_specs(MaxwellForm::RateExplicit),
+            1e-3,
+        )
+        .unwrap();
+        b.retune::<LibmExp>(1.5).unwrap();
+        let before = b.clone();
+        let a_t = Param::scalar("a_t");
+        assert_eq!(
+            b.retune::<LibmExp>(f32::NAN),
+            Err(ParamError::NotFinite { param: a_t })
+        );
+        assert_eq!(
+            b.retune::<LibmExp>(0.0),
+            Err(ParamError::NotPositive {
+                param: a_t,
+                value: 0.0
+            })
+        );
+        assert_eq!(
+            b.retune::<LibmExp>(-2.0),
+            Err(ParamError::NotPositive {
+                param: a_t,
+                value: -2.0
+            })
+        );
+        // Warm enough that the explicit form's fastest cell reaches h = 1.
+        assert_eq!(
+            b.retune::<LibmExp>(0.5),
+            Err(ParamError::ExplicitUnstable {
+                cell: 4,
+                omega_dt: 1.0
+            })
+        );
+        // Cold enough that a slow cell's ω dt underflows to zero, and hot
+        // enough that a fast one's overflows.
+        for (omega, a_t, err) in [
+            (
+                1e-6,
+                f32::MAX,
+                ParamError::NotPositive {
+                    param: Param::item("omega", 0),
+                    value: 0.0,
+                },
+            ),
+            (
+                1e9,
+                1e-38,
+                ParamError::NotFinite {
+                    param: Param::item("omega", 0),
+                },
+            ),
+        ] {
+            let spec = [MaxwellSpec::new(omega, 0.1)];
+            let mut one =
+                MaxwellBank::<f32, 1>::new(MaxwellForm::RateExactRamp, &spec, 1e-3).unwrap();
+            let kept = one.clone();
+            assert_eq!(one.retune::<LibmExp>(a_t), Err(err));
+            assert_eq!(one, kept);
+        }
+        assert_eq!(b, before);
+    }
+
+    #[test]
+    fn branch_response_is_the_discrete_steady_state() {
+        let (dt, per) = (1e-3, 200usize);
+        let omega = core::f64::consts::TAU / (dt * per as f64);
+        for form in FORMS {
+            let bank = MaxwellBank::<f64, 3>::new(form, &SPECS, dt).unwrap();
+            let mut s = bank.rest(0.0);
+            let x = |n: usize| (omega * dt * n as f64).sin();
+            let (mut re, mut im) = (0.0, 0.0);
+            let periods = 40; // the slowest cell (3 rad/s) decays by e^-24
+            for n in 1..=periods * per {
+                let (xn, xo) = (x(n), x(n - 1));
+                let drive = Drive {
+                    x: xn,
+                    dx: xn - xo,
+                    f_inf: xn,
+                    df_inf: xn - xo,
+                    k_inf: 1.0,
+                };
+                let f = bank.step(&mut s, &drive).force;
+                if n > (periods - 1) * per {
+                    let phase = omega * dt * n as f64;
+                    re += 2.0 * f * phase.sin() / per as f64;
+                    im += 2.0 * f * phase.cos() / per as f64;
+                }
+            }
+            let (sr, lr) = bank.branch_response(omega);
+            assert!(
+                (re - sr).abs() < 1e-9 && (im - lr).abs() < 1e-9,
+                "{form:?}: ({re}, {im}) vs ({sr}, {lr})"
+            );
+            // And close to eq 1.8 at h <= 0.3 (each form's own error).
+            let (s8, l8) = SPECS.iter().fold((0.0, 0.0), |(a, b), c| {
+                let d = omega * omega + c.omega * c.omega;
+                (a + c.g * omega * omega / d, b + c.g * omega * c.omega / d)
+            });
+            assert!(
+                (sr / s8 - 1.0).abs() < 0.05 && (lr / l8 - 1.0).abs() < 0.05,
+                "{form:?}"
+            );
+        }
     }
 }

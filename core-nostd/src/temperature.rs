@@ -20,9 +20,12 @@
 //! The thesis gives no shift-factor law; the two classical ones are here:
 //! Williams-Landel-Ferry, `log10 a_T = -C_1 (T - T_0) / (C_2 + T - T_0)`, and
 //! Arrhenius, `ln a_T = (E_a / R) (1/T - 1/T_0)` (T in kelvin). A running
-//! bank is re-tuned with [`crate::MaxwellBank::shifted`].
+//! bank is re-tuned with [`crate::MaxwellBank::shifted`] (f64, exact) or
+//! on line with [`crate::MaxwellBank::retune`] and [`ShiftFactor::at_in`]
+//! (in the working type, with libm's or micromath's exponentials).
 
 use crate::error::{Param, ParamError, finite, positive};
+use crate::real::{Exponentials, LibmExp, Real};
 
 /// A shift-factor law a_T (see the module docs for the direction).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -64,32 +67,52 @@ impl ShiftFactor {
         })
     }
 
-    /// a_T at temperature `t`. Refuses temperatures where the law has no
-    /// meaning (WLF at T - T_0 <= -C_2, Arrhenius at T <= 0 K) and shift
-    /// factors that are not finite and positive in f64.
+    /// a_T at temperature `t`, in f64 with libm. Refuses temperatures where
+    /// the law has no meaning (WLF at T - T_0 <= -C_2, Arrhenius at
+    /// T <= 0 K) and shift factors that are not finite and positive in f64.
     pub fn at(&self, t: f64) -> Result<f64, ParamError> {
+        self.at_in::<f64, LibmExp>(t)
+    }
+
+    /// a_T at temperature `t`, computed in the working type with the
+    /// exponentials `E` (one exponential, two divisions): the on-line path
+    /// beside [`crate::MaxwellBank::retune`]. WLF is evaluated as
+    /// `exp(-ln 10 C_1 ΔT / (C_2 + ΔT))`, Arrhenius as
+    /// `exp(E_a/R (T_0 - T) / (T T_0))` (no difference of reciprocals, which
+    /// would cancel in f32). Same refusals as [`Self::at`], in the range of
+    /// `T`.
+    pub fn at_in<T: Real, E: Exponentials<T>>(&self, t: T) -> Result<T, ParamError> {
         let param = Param::scalar("temperature");
-        let t = finite(param, t)?;
-        let a = match *self {
+        if !t.is_finite() {
+            return Err(ParamError::NotFinite { param });
+        }
+        let exponent = match *self {
             Self::Wlf { c1, c2, t_ref } => {
-                let dt = t - t_ref;
-                if dt <= -c2 {
+                let (c2_t, dt) = (T::from_f64(c2), t - T::from_f64(t_ref));
+                if dt <= -c2_t {
                     return Err(ParamError::OutOfRange {
                         param,
-                        value: t,
+                        value: t.to_f64(),
                         min: t_ref - c2,
                         min_open: true,
                         max: f64::INFINITY,
                     });
                 }
-                libm::exp10(-c1 * dt / (c2 + dt))
+                T::from_f64(-core::f64::consts::LN_10 * c1) * dt / (c2_t + dt)
             }
             Self::Arrhenius { activation, t_ref } => {
-                let t = positive(param, t)?;
-                libm::exp(activation * (1.0 / t - 1.0 / t_ref))
+                if t <= T::ZERO {
+                    return Err(ParamError::NotPositive {
+                        param,
+                        value: t.to_f64(),
+                    });
+                }
+                let t_ref = T::from_f64(t_ref);
+                T::from_f64(activation) * (t_ref - t) / (t * t_ref)
             }
         };
-        if a.is_finite() && a > 0.0 {
+        let a = E::exp(exponent);
+        if a.is_finite() && a > T::ZERO {
             Ok(a)
         } else {
             Err(ParamError::NotFinite {
@@ -142,6 +165,44 @@ mod tests {
         assert!(matches!(arr.at(1e-3), Err(ParamError::NotFinite { .. })));
         assert!(ShiftFactor::wlf(17.44, 0.0, 20.0).is_err());
         assert!(ShiftFactor::arrhenius(8000.0, 0.0).is_err());
+    }
+
+    #[test]
+    fn working_type_shift_factors_follow_the_f64_law() {
+        let wlf = ShiftFactor::wlf(17.44, 51.6, 20.0).unwrap();
+        let arr = ShiftFactor::arrhenius(8000.0, 293.15).unwrap();
+        for (law, temps) in [
+            (wlf, [-10.0, 0.0, 15.0, 20.0, 35.0, 80.0]),
+            (arr, [243.15, 273.15, 288.15, 293.15, 308.15, 353.15]),
+        ] {
+            for t in temps {
+                let exact = law.at(t).unwrap();
+                let f = law.at_in::<f32, LibmExp>(t as f32).unwrap() as f64;
+                // The exponent ln a_T carries a few f32 roundings.
+                let bound = 8.0 * f32::EPSILON as f64 * (1.0 + exact.ln().abs());
+                assert!((f / exact - 1.0).abs() < bound, "libm {t}: {f} vs {exact}");
+                #[cfg(feature = "micromath")]
+                {
+                    let m = law.at_in::<f32, crate::MicromathExp>(t as f32).unwrap() as f64;
+                    assert!((m / exact - 1.0).abs() < 2.4e-3 + bound, "micromath {t}");
+                }
+            }
+        }
+        assert_eq!(arr.at_in::<f32, LibmExp>(293.15), Ok(1.0));
+        assert!(matches!(
+            wlf.at_in::<f32, LibmExp>(-40.0),
+            Err(ParamError::OutOfRange { .. })
+        ));
+        assert!(matches!(
+            arr.at_in::<f32, LibmExp>(0.0),
+            Err(ParamError::NotPositive { .. })
+        ));
+        // e^(8000 (293 - 20) / (20 293)) overflows f32 but not f64.
+        assert!(arr.at(20.0).is_ok());
+        assert!(matches!(
+            arr.at_in::<f32, LibmExp>(20.0),
+            Err(ParamError::NotFinite { .. })
+        ));
     }
 
     type Bank = MaxwellBank<f64, 4, Plain<f64>>;

@@ -30,6 +30,26 @@ fn fitted_banks_reach_one_percent_with_8_cells_and_a_tenth_with_12() {
 }
 
 #[test]
+fn f32_retunes_stay_within_their_exponentials_error() {
+    use bushing_sim::fractional_report::{RETUNE_SHIFTS, RetunePath, retune_bank, retune_error};
+    let specs = retune_bank().unwrap();
+    for a_t in RETUNE_SHIFTS {
+        let worst = |path| {
+            let (s, l) = retune_error(&specs, a_t, path).unwrap();
+            s.max(l)
+        };
+        let rounded = worst(RetunePath::F64);
+        // f32 rounding of the coefficients: a few ulps on the modulus.
+        assert!(rounded < 2e-7, "a_t {a_t}: f64 path {rounded}");
+        let libm = worst(RetunePath::Libm);
+        assert!(libm < 2e-7, "a_t {a_t}: libm {libm}");
+        // micromath's exp is off by up to 2.4e-3 on e^-h.
+        let micromath = worst(RetunePath::Micromath);
+        assert!(micromath < 2.4e-3, "a_t {a_t}: micromath {micromath}");
+    }
+}
+
+#[test]
 fn committed_fractional_report_is_current() {
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let committed =

@@ -7,8 +7,7 @@
 
 #[cfg(target_os = "none")]
 mod firmware {
-    use bushing::MaxwellForm;
-    use bushing::XfForm;
+    use bushing::{LibmExp, MaxwellForm, MicromathExp, ShiftFactor, XfForm};
     use bushing_boards::{
         berg, bouc_wen, composite, dahl, grunwald, iwan_oscillator, iwan4, maxwell4,
         maxwell4_compensated, maxwell8, polynomial, run, run_oscillator, sliders4, spline, sts16,
@@ -34,6 +33,26 @@ mod firmware {
     fn per_step(syst: &mut SYST, baseline: u32, f: impl FnOnce()) -> u32 {
         let t = ticks(syst, f).saturating_sub(baseline);
         t * INSTRUCTIONS_PER_TICK * 10 / STEPS as u32
+    }
+
+    /// Instructions per call of `f`, times 10, for arguments sweeping
+    /// 1.0 to 3.0 (a shift factor, or a temperature offset).
+    fn per_call(syst: &mut SYST, mut f: impl FnMut(f32)) -> u32 {
+        let t = ticks(syst, || {
+            for k in 0..STEPS {
+                f(1.0 + core::hint::black_box(k as f32) * 1e-3);
+            }
+        });
+        t * INSTRUCTIONS_PER_TICK * 10 / STEPS as u32
+    }
+
+    fn report_call(name: &str, tenths: u32) {
+        hprintln!(
+            "{:<44} {:>5}.{} instructions/call",
+            name,
+            tenths / 10,
+            tenths % 10
+        );
     }
 
     fn report(name: &str, tenths: u32) {
@@ -120,22 +139,37 @@ mod firmware {
         let Ok(b) = maxwell8() else { fail() };
         let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
         report("rate-exact-ramp, 8 cells", t);
-        // Re-tuning a running 8-cell bank to another temperature: one
-        // f64 expm1 and exp per cell (soft-float on this core).
+        // Re-tuning a running 8-cell bank to another temperature: exact in
+        // f64 (soft-float on this core), or in place in f32.
         let bank = &b.effects().0;
-        let t = ticks(&mut syst, || {
-            for k in 0..STEPS {
-                let a_t = 1.0 + core::hint::black_box(k as f64) * 1e-3;
-                let _ = core::hint::black_box(bank.shifted(a_t));
-            }
+        let t = per_call(&mut syst, |a_t| {
+            let _ = core::hint::black_box(bank.shifted(f64::from(a_t)));
         });
-        let tenths = t * INSTRUCTIONS_PER_TICK * 10 / STEPS as u32;
-        hprintln!(
-            "{:<44} {:>5}.{} instructions/call",
-            "re-tune 8 Maxwell cells (libm f64)",
-            tenths / 10,
-            tenths % 10
-        );
+        report_call("re-tune 8 Maxwell cells, f64 (libm, soft)", t);
+        let mut bank = bank.clone();
+        let t = per_call(&mut syst, |a_t| {
+            let _ = core::hint::black_box(bank.retune::<LibmExp>(a_t));
+        });
+        report_call("re-tune 8 Maxwell cells, f32 libm", t);
+        let t = per_call(&mut syst, |a_t| {
+            let _ = core::hint::black_box(bank.retune::<MicromathExp>(a_t));
+        });
+        report_call("re-tune 8 Maxwell cells, f32 micromath", t);
+        let Ok(wlf) = ShiftFactor::wlf(17.44, 51.6, 20.0) else {
+            fail()
+        };
+        let t = per_call(&mut syst, |a_t| {
+            let _ = core::hint::black_box(wlf.at(f64::from(a_t) + 19.0));
+        });
+        report_call("WLF shift factor a_T, f64 (libm, soft)", t);
+        let t = per_call(&mut syst, |a_t| {
+            let _ = core::hint::black_box(wlf.at_in::<f32, LibmExp>(a_t + 19.0));
+        });
+        report_call("WLF shift factor a_T, f32 libm", t);
+        let t = per_call(&mut syst, |a_t| {
+            let _ = core::hint::black_box(wlf.at_in::<f32, MicromathExp>(a_t + 19.0));
+        });
+        report_call("WLF shift factor a_T, f32 micromath", t);
         let Ok(b) = grunwald::<64>() else { fail() };
         let t = per_step(&mut syst, baseline, || run(&b, &xs, force_only));
         report("Grünwald fractional cell, N = 64", t);
