@@ -212,6 +212,30 @@ pub(crate) fn positive(param: Param, value: f64) -> Result<f64, ParamError> {
     }
 }
 
+/// Checks that `value` is finite and in `[min, max]` (`min` excluded when
+/// `min_open`).
+pub(crate) fn in_range(
+    param: Param,
+    value: f64,
+    min: f64,
+    min_open: bool,
+    max: f64,
+) -> Result<f64, ParamError> {
+    let value = finite(param, value)?;
+    let above = if min_open { value > min } else { value >= min };
+    if above && value <= max {
+        Ok(value)
+    } else {
+        Err(ParamError::OutOfRange {
+            param,
+            value,
+            min,
+            min_open,
+            max,
+        })
+    }
+}
+
 /// Checks that `value` is finite.
 pub(crate) fn finite(param: Param, value: f64) -> Result<f64, ParamError> {
     if value.is_finite() {

@@ -24,7 +24,8 @@
 //! [`Exponentials`] of libm or (feature `micromath`) micromath. [`oscillator`]
 //! integrates a unit-mass mode
 //! whose restoring force is any bushing (the Iwan oscillator of the joint
-//! thesis, "seed 004").
+//! thesis, "seed 004"), and [`tracker`] follows the frequency and damping
+//! of measured modes on line (the modal Kalman tracker of seed 004).
 //!
 //! ## The contract
 //!
@@ -82,6 +83,7 @@ pub mod oscillator;
 pub mod real;
 pub mod stack;
 pub mod temperature;
+pub mod tracker;
 pub mod xf;
 
 pub use accumulator::{Accumulator, Compensated, Plain};

@@ -7,6 +7,9 @@
 
 #[cfg(target_os = "none")]
 mod firmware {
+    use bushing::tracker::{
+        Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning, UtParams,
+    };
     use bushing::{LibmExp, MaxwellForm, MicromathExp, ShiftFactor, XfForm};
     use bushing_boards::{
         berg, bouc_wen, composite, dahl, grunwald, iwan_oscillator, iwan4, maxwell4,
@@ -206,6 +209,44 @@ mod firmware {
             iterations as usize / STEPS,
             iterations as usize * 100 / STEPS % 100
         );
+        // Modal tracker: one mode, one accelerometer, 50 samples per period.
+        for (filter, name) in [
+            (Filter::Ekf, "modal tracker EKF, 1 mode 1 sensor (4 states)"),
+            (
+                Filter::Ukf(UtParams::default()),
+                "modal tracker UKF, 1 mode 1 sensor (4 states)",
+            ),
+        ] {
+            let Ok(tracker) = ModalTracker::<f32, 4>::new(
+                1e-3,
+                &[SensorSpec {
+                    measured: Measured::Acceleration,
+                    noise: 0.01,
+                }],
+                &[ModeInit {
+                    frequency: 20.0,
+                    damping: 0.01,
+                }],
+                &[(1.0, 0.0)],
+                &Tuning::default(),
+                filter,
+            ) else {
+                fail()
+            };
+            let mut state = tracker.start();
+            // The signal by a rotation recurrence: a few instructions.
+            let (c, s) = (0.992_114_7f32, 0.125_333_2f32); // 2π / 50
+            let (mut re, mut im) = (1.0f32, 0.0f32);
+            let t = per_step(&mut syst, baseline, || {
+                for _ in 0..STEPS {
+                    let r = c * re - s * im;
+                    im = s * re + c * im;
+                    re = r;
+                    let _ = core::hint::black_box(tracker.step(&mut state, &[re]));
+                }
+            });
+            report(name, t);
+        }
         debug::exit(debug::EXIT_SUCCESS);
         loop {
             cortex_m::asm::nop();
