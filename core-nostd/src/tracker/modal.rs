@@ -595,19 +595,32 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         self.measured.get(c).copied().unwrap_or_default().order()
     }
 
+    /// `(e^λ cos θ, e^λ sin θ)` of mode `m`: its one sin/cos polynomial and
+    /// `exp` per step.
+    #[inline(always)]
+    fn rotation(&self, x: &[T; N], m: usize) -> (T, T) {
+        let (ti, li) = self.theta_lambda(m);
+        let (s, c) = sin_cos(get(x, ti));
+        let e = get(x, li).exp();
+        (e * c, e * s)
+    }
+
+    /// Rotates mode `m`'s analytic-signal pairs by `(ec, es)` (eq 3.28).
+    #[inline(always)]
+    fn rotate_mode(&self, x: &mut [T; N], m: usize, (ec, es): (T, T)) {
+        for k in 0..self.sensors {
+            let (ai, bi) = self.pair(m, k);
+            let (a, b) = (get(x, ai), get(x, bi));
+            put(x, ai, ec * a - es * b);
+            put(x, bi, es * a + ec * b);
+        }
+    }
+
     /// Applies the process (eq 3.28) to a state vector.
     fn process(&self, x: &mut [T; N]) {
         for m in 0..self.modes {
-            let (ti, li) = self.theta_lambda(m);
-            let (s, c) = sin_cos(get(x, ti));
-            let e = get(x, li).exp();
-            let (ec, es) = (e * c, e * s);
-            for k in 0..self.sensors {
-                let (ai, bi) = self.pair(m, k);
-                let (a, b) = (get(x, ai), get(x, bi));
-                put(x, ai, ec * a - es * b);
-                put(x, bi, es * a + ec * b);
-            }
+            let r = self.rotation(x, m);
+            self.rotate_mode(x, m, r);
         }
     }
 
@@ -730,23 +743,22 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     /// EKF prediction: x = f(x), P = F P Fᵀ + Q with F applied as row and
     /// vector operations (F is the identity but for the pair rows).
     fn predict_ekf(&self, state: &mut ModalState<T, N>) -> bool {
-        let x = &mut state.x;
+        let mut rot = [(T::ZERO, T::ZERO); N];
+        for (m, r) in rot.iter_mut().enumerate().take(self.modes) {
+            *r = self.rotation(&state.x, m);
+            self.rotate_mode(&mut state.x, m, *r);
+        }
+        let x = &state.x;
         let p = &mut state.p;
-        for m in 0..self.modes {
+        for (m, &(ec, es)) in rot.iter().enumerate().take(self.modes) {
             let (ti, li) = self.theta_lambda(m);
-            let (s, c) = sin_cos(get(x, ti));
-            let e = get(x, li).exp();
-            let (ec, es) = (e * c, e * s);
             let (row_t, row_l) = (
                 p.get(ti).copied().unwrap_or([T::ZERO; N]),
                 p.get(li).copied().unwrap_or([T::ZERO; N]),
             );
             for k in 0..self.sensors {
                 let (ai, bi) = self.pair(m, k);
-                let (a, b) = (get(x, ai), get(x, bi));
-                let (a1, b1) = (ec * a - es * b, es * a + ec * b);
-                put(x, ai, a1);
-                put(x, bi, b1);
+                let (a1, b1) = (get(x, ai), get(x, bi));
                 // Rows: (F P)[a] = ec P[a] - es P[b] - b' P[θ] + a' P[λ].
                 let (ra, rb) = (
                     p.get(ai).copied().unwrap_or([T::ZERO; N]),
@@ -770,11 +782,8 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         }
         // Columns: row i of F P Fᵀ is F applied to row i of F P.
         for row in p.iter_mut() {
-            for m in 0..self.modes {
+            for (m, &(ec, es)) in rot.iter().enumerate().take(self.modes) {
                 let (ti, li) = self.theta_lambda(m);
-                let (s, c) = sin_cos(get(x, ti));
-                let e = get(x, li).exp();
-                let (ec, es) = (e * c, e * s);
                 let (vt, vl) = (get(row, ti), get(row, li));
                 for k in 0..self.sensors {
                     let (ai, bi) = self.pair(m, k);
