@@ -28,7 +28,9 @@
 //!   the largest damping ratio; covariance diagonal floored; an innovation
 //!   gate (outliers skipped, a run of them re-acquires); a mode whose
 //!   amplitude sinks below `fade_snr` times the noise is *faded*: its ω and
-//!   σ are frozen and its amplitudes kept loose until it comes back. A step
+//!   σ are frozen and its amplitudes kept loose until it comes back above
+//!   twice that, when ω and σ get their start uncertainty again (they may
+//!   have moved while the mode was gone) and are tracked again. A step
 //!   that would leave a non-finite state is undone and the covariance reset.
 //! - **States**: `N = modes (2 sensors + 2)` values and an N×N covariance.
 //! - **Cost** per sample, n = N states, C sensors: EKF about 8n² (covariance
@@ -1031,7 +1033,8 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         }
     }
 
-    /// Marks modes faded or back, and keeps a faded mode's amplitudes loose.
+    /// Marks modes faded or back, keeps a faded mode's amplitudes loose and
+    /// gives a returning mode's ω and σ their start uncertainty.
     fn fade(&self, state: &mut ModalState<T, N>) {
         for m in 0..self.modes {
             let (ti, li) = self.theta_lambda(m);
@@ -1054,6 +1057,11 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             put(&mut state.faded, m, now);
             if now {
                 self.loosen_amplitudes(state, Some(m));
+            } else if was {
+                // Back: the frequency and damping may have moved while the
+                // mode was gone, so they are as uncertain as at the start.
+                self.loosen(state, ti);
+                self.loosen(state, li);
             }
         }
     }
@@ -1067,19 +1075,24 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             }
             for c in 0..self.sensors {
                 let (ai, bi) = self.pair(m, c);
-                for i in [ai, bi] {
-                    let p0 = get(&self.p0, i);
-                    if entry(&state.p, i, i) < p0 {
-                        for j in 0..N {
-                            if j != i {
-                                self.set(&mut state.p, i, j, T::ZERO);
-                                self.set(&mut state.p, j, i, T::ZERO);
-                            }
-                        }
-                        self.set(&mut state.p, i, i, p0);
-                    }
+                self.loosen(state, ai);
+                self.loosen(state, bi);
+            }
+        }
+    }
+
+    /// Raises the variance of state `i` to its start value, if below, and
+    /// drops its correlations.
+    fn loosen(&self, state: &mut ModalState<T, N>, i: usize) {
+        let p0 = get(&self.p0, i);
+        if entry(&state.p, i, i) < p0 {
+            for j in 0..N {
+                if j != i {
+                    self.set(&mut state.p, i, j, T::ZERO);
+                    self.set(&mut state.p, j, i, T::ZERO);
                 }
             }
+            self.set(&mut state.p, i, i, p0);
         }
     }
 }
