@@ -21,6 +21,37 @@ use bushing::{
     },
 };
 
+/// Reproducible white noise for the test records: xorshift64* seeded
+/// through splitmix64 (so that small or similar seeds give unrelated
+/// streams from the first draw), and Box-Muller with libm, so the host and
+/// the Cortex-M targets draw the same numbers.
+#[derive(Debug, Clone)]
+pub struct Noise(u64);
+
+impl Noise {
+    /// A generator for `seed`.
+    pub fn new(seed: u64) -> Self {
+        let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        Self((z ^ (z >> 31)) | 1)
+    }
+
+    /// Uniform in (0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    /// Standard normal.
+    pub fn gauss(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        libm::sqrt(-2.0 * libm::log(u)) * libm::cos(core::f64::consts::TAU * v)
+    }
+}
+
 /// A failed check: what was measured, the value and the bound it broke.
 #[derive(Debug, Clone, Copy)]
 pub struct Failure {
@@ -1135,17 +1166,9 @@ fn modal_tracker_free_decay_f32(filter: Filter) -> CaseResult {
     )
     .map_err(param)?;
     let mut state = tracker.start();
-    let mut seed = 0x9E37_79B9_7F4A_7C15u64;
-    let mut uniform = || {
-        seed ^= seed >> 12;
-        seed ^= seed << 25;
-        seed ^= seed >> 27;
-        ((seed.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    };
+    let mut rng = Noise::new(5);
     for step in 1..=(10.0 * per) as usize {
-        let (u, v) = (uniform(), uniform());
-        let gauss = libm::sqrt(-2.0 * libm::log(u)) * libm::cos(core::f64::consts::TAU * v);
-        let z = accel(step as f64 * dt).0 + noise * gauss;
+        let z = accel(step as f64 * dt).0 + noise * rng.gauss();
         let report = tracker.step(&mut state, &[z as f32]);
         if report.repaired || report.refused {
             return Err(Failure {
@@ -1169,22 +1192,6 @@ fn modal_tracker_free_decay_f32(filter: Filter) -> CaseResult {
     )
 }
 
-/// xorshift64* and Box-Muller in f64 with libm: the same noise on every
-/// target.
-struct Gauss(u64);
-impl Gauss {
-    fn next(&mut self) -> f64 {
-        let mut uniform = || {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        };
-        let (u, v) = (uniform(), uniform());
-        libm::sqrt(-2.0 * libm::log(u)) * libm::cos(core::f64::consts::TAU * v)
-    }
-}
-
 fn modal_tracker_fit_gap_reacquire_f32(filter: Filter) -> CaseResult {
     // A sustained 50 Hz vibration at 1 kHz, 40 dB of noise. The tracker
     // starts from the least-squares fit of the first period (f64, once),
@@ -1194,7 +1201,7 @@ fn modal_tracker_fit_gap_reacquire_f32(filter: Filter) -> CaseResult {
     // 2 %, and the mode was faded during the gap.
     let (f0, dt) = (50.0f64, 1e-3f64);
     let noise = libm::sqrt(0.5) * 1e-2;
-    let mut gauss = Gauss(0x2545_F491_4F6C_DD1D);
+    let mut gauss = Noise::new(11);
     let w = core::f64::consts::TAU * f0;
     let signal = |k: usize| {
         let t = k as f64 * dt;
@@ -1208,7 +1215,7 @@ fn modal_tracker_fit_gap_reacquire_f32(filter: Filter) -> CaseResult {
     };
     let mut first = [0.0f64; 21];
     for (k, x) in first.iter_mut().enumerate() {
-        *x = signal(k) + noise * gauss.next();
+        *x = signal(k) + noise * gauss.gauss();
     }
     let mut fitted = [SensorFit::default()];
     let fit = fit_first_period(dt, &[&first], &mut fitted).map_err(|_| Failure {
@@ -1248,7 +1255,7 @@ fn modal_tracker_fit_gap_reacquire_f32(filter: Filter) -> CaseResult {
     }
     let back = 3000 + (20.0 / (1.01 * f0 * dt)) as usize;
     for k in first.len()..=back {
-        let x = signal(k) + noise * gauss.next();
+        let x = signal(k) + noise * gauss.gauss();
         let report = tracker.step(&mut state, &[x as f32]);
         holds("no covariance repair", !report.repaired)?;
         faded |= tracker.mode(&state, 0).faded;

@@ -9,27 +9,7 @@
 
 use bushing::tracker::UtParams;
 use bushing::tracker::{Filter, Measured, ModalState, ModalTracker, ModeInit, SensorSpec, Tuning};
-
-/// xorshift64* seeded through splitmix64, with Box-Muller.
-struct Noise(u64);
-impl Noise {
-    fn new(seed: u64) -> Self {
-        let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        Self((z ^ (z >> 31)) | 1)
-    }
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        ((self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn gauss(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-    }
-}
+use bushing_tests::Noise;
 
 /// Smallest eigenvalue of a symmetric matrix (cyclic Jacobi, in f64).
 #[allow(clippy::needless_range_loop)] // rotations read best indexed
