@@ -8,7 +8,8 @@
 #[cfg(target_os = "none")]
 mod firmware {
     use bushing::tracker::{
-        Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning, UtParams,
+        Filter, Measured, ModalTracker, ModeInit, SensorFit, SensorSpec, Tuning, UtParams,
+        fit_first_period,
     };
     use bushing::{LibmExp, MaxwellForm, MicromathExp, ShiftFactor, XfForm};
     use bushing_boards::{
@@ -209,48 +210,116 @@ mod firmware {
             iterations as usize / STEPS,
             iterations as usize * 100 / STEPS % 100
         );
-        // Modal tracker: one mode, one accelerometer, 50 samples per period.
-        for (filter, name) in [
-            (Filter::Ekf, "modal tracker EKF, 1 mode 1 sensor (4 states)"),
+        // Modal tracker: one mode and one accelerometer, 50 samples per
+        // period; then two modes on three accelerometers (16 states).
+        let one = [SensorSpec {
+            measured: Measured::Acceleration,
+            noise: 0.01,
+        }];
+        let three = [one[0]; 3];
+        let mode = ModeInit {
+            frequency: 20.0,
+            damping: 0.01,
+        };
+        let two = [
+            mode,
+            ModeInit {
+                frequency: 51.0,
+                damping: 0.005,
+            },
+        ];
+        for (filter, small, large) in [
+            (
+                Filter::Ekf,
+                "modal tracker EKF, 1 mode 1 sensor (4 states)",
+                "modal tracker EKF, 2 modes 3 sensors (16 states)",
+            ),
             (
                 Filter::Ukf(UtParams::default()),
                 "modal tracker UKF, 1 mode 1 sensor (4 states)",
+                "modal tracker UKF, 2 modes 3 sensors (16 states)",
             ),
         ] {
-            let Ok(tracker) = ModalTracker::<f32, 4>::new(
-                1e-3,
-                &[SensorSpec {
-                    measured: Measured::Acceleration,
-                    noise: 0.01,
-                }],
-                &[ModeInit {
-                    frequency: 20.0,
-                    damping: 0.01,
-                }],
-                &[(1.0, 0.0)],
-                &Tuning::default(),
-                filter,
-            ) else {
-                fail()
-            };
-            let mut state = tracker.start();
-            // The signal by a rotation recurrence: a few instructions.
-            let (c, s) = (0.992_114_7f32, 0.125_333_2f32); // 2π / 50
-            let (mut re, mut im) = (1.0f32, 0.0f32);
-            let t = per_step(&mut syst, baseline, || {
-                for _ in 0..STEPS {
-                    let r = c * re - s * im;
-                    im = s * re + c * im;
-                    re = r;
-                    let _ = core::hint::black_box(tracker.step(&mut state, &[re]));
-                }
-            });
-            report(name, t);
+            let t = tracker_cost::<4>(&mut syst, baseline, filter, &one, &[mode]);
+            report(small, t);
+            let t = tracker_cost::<16>(&mut syst, baseline, filter, &three, &two);
+            report(large, t);
         }
+        // Start values: least-squares fit of one noisy 50-sample period, in
+        // f64 (soft-float on the M4F).
+        let mut record = [0.0f64; 50];
+        let (c, s) = (0.992_114_701_314_478_f64, 0.125_333_233_564_304_2_f64);
+        let (mut re, mut im) = (1.0f64, 0.0f64);
+        for (k, x) in record.iter_mut().enumerate() {
+            // A 1e-3 deterministic pseudo-noise, so the fit iterates.
+            *x = re + 1e-3 * ((k * 7919 % 13) as f64 - 6.0) / 6.0;
+            let r = 0.999 * (c * re - s * im);
+            im = 0.999 * (s * re + c * im);
+            re = r;
+        }
+        let mut out = [SensorFit::default()];
+        let mut iterations = 0;
+        let t = ticks(&mut syst, || {
+            for _ in 0..10 {
+                if let Ok(fit) = fit_first_period(1e-3, &[core::hint::black_box(&record)], &mut out)
+                {
+                    iterations = fit.iterations;
+                }
+            }
+        });
+        hprintln!(
+            "{:<44} {:>8} instructions/call ({} iterations)",
+            "first-period fit, 50 samples (f64)",
+            t * INSTRUCTIONS_PER_TICK / 10,
+            iterations
+        );
         debug::exit(debug::EXIT_SUCCESS);
         loop {
             cortex_m::asm::nop();
         }
+    }
+
+    /// Instructions per tracker update, times 10, on a signal made by a
+    /// rotation recurrence (a few instructions); sensor c reads the signal
+    /// times a mode-shape-like factor.
+    fn tracker_cost<const N: usize>(
+        syst: &mut SYST,
+        baseline: u32,
+        filter: Filter,
+        sensors: &[SensorSpec],
+        modes: &[ModeInit],
+    ) -> u32 {
+        let amplitudes = [(1.0, 0.0); 8];
+        let Some(amplitudes) = amplitudes.get(..sensors.len() * modes.len()) else {
+            fail()
+        };
+        let Ok(tracker) = ModalTracker::<f32, N>::new(
+            1e-3,
+            sensors,
+            modes,
+            amplitudes,
+            &Tuning::default(),
+            filter,
+        ) else {
+            fail()
+        };
+        let mut state = tracker.start();
+        let (c, s) = (0.992_114_7f32, 0.125_333_2f32); // 2π / 50
+        let (mut re, mut im) = (1.0f32, 0.0f32);
+        let shape = [1.0f32, 2.0, -1.8];
+        let mut samples = [0.0f32; 3];
+        let n = sensors.len().min(3);
+        per_step(syst, baseline, || {
+            for _ in 0..STEPS {
+                let r = c * re - s * im;
+                im = s * re + c * im;
+                re = r;
+                for (x, k) in samples.iter_mut().zip(shape) {
+                    *x = k * re;
+                }
+                let _ = core::hint::black_box(tracker.step(&mut state, &samples[..n]));
+            }
+        })
     }
 
     fn fail() -> ! {

@@ -8,13 +8,17 @@
 //!   3.43-3.45) and several modes, as an EKF or a UKF.
 //! - [`init`]: start values by least squares on the first pseudo-period.
 //! - [`trig`]: sin and cos of the phase step without libm trig.
+//! - [`unscented`]: scalar unscented transform and linearisation (eqs
+//!   3.34-3.40), compared with Table 1 of §3.2.4 in `docs/unscented-table.md`.
 
 pub mod init;
 pub mod modal;
 pub mod trig;
+pub mod unscented;
 
 pub use init::{FirstPeriodFit, FitError, SensorFit, fit_amplitudes, fit_first_period};
 pub use modal::{
     Filter, Measured, ModalReport, ModalState, ModalTracker, ModeInit, ModeStatus, SensorSpec,
     Tuning, UtParams,
 };
+pub use unscented::{ScalarUt, linearised_scalar, unscented_scalar};
