@@ -8,8 +8,8 @@
 #[cfg(target_os = "none")]
 mod firmware {
     use bushing::tracker::{
-        Filter, Measured, ModalTracker, ModeInit, SensorFit, SensorSpec, Tuning, UtParams,
-        fit_first_period,
+        Channel, Filter, Measured, ModalTracker, ModeInit, ModulusSpec, ModulusTracker, SensorFit,
+        SensorSpec, SineSpec, SineTracker, Tuning, UtParams, fit_first_period,
     };
     use bushing::{LibmExp, MaxwellForm, MicromathExp, ShiftFactor, XfForm};
     use bushing_boards::{
@@ -245,6 +245,57 @@ mod firmware {
             let t = tracker_cost::<16>(&mut syst, baseline, filter, &three, &two);
             report(large, t);
         }
+        // Sine tracker and modulus tracker at 50 samples per period.
+        let sine = SineSpec {
+            frequency: 20.0,
+            bandwidth: 1.0,
+        };
+        let channel = Channel {
+            noise: 0.01,
+            amplitude: 1.0,
+        };
+        let Ok(tracker) = SineTracker::<f32>::new(1e-3, &sine, channel) else {
+            fail()
+        };
+        let mut state = tracker.start();
+        let (c, s) = (0.992_114_7f32, 0.125_333_2f32);
+        let (mut re, mut im) = (1.0f32, 0.0f32);
+        let t = per_step(&mut syst, baseline, || {
+            for _ in 0..STEPS {
+                let r = c * re - s * im;
+                im = s * re + c * im;
+                re = r;
+                let _ = core::hint::black_box(tracker.step(&mut state, re));
+            }
+        });
+        report("sine tracker (2 states), one update", t);
+        let Ok(modulus) = ModulusTracker::<f32>::new(
+            1e-3,
+            &ModulusSpec {
+                sine,
+                displacement: channel,
+                force: channel,
+                min_snr: 10.0,
+            },
+        ) else {
+            fail()
+        };
+        let mut state = modulus.start();
+        let t = per_step(&mut syst, baseline, || {
+            for _ in 0..STEPS {
+                let r = c * re - s * im;
+                im = s * re + c * im;
+                re = r;
+                let _ = core::hint::black_box(modulus.step(&mut state, re, 0.9 * re - 0.2 * im));
+            }
+        });
+        report("modulus tracker (x and F), one update", t);
+        let t = per_step(&mut syst, baseline, || {
+            for _ in 0..STEPS {
+                let _ = core::hint::black_box(modulus.modulus(core::hint::black_box(&state)));
+            }
+        });
+        report("modulus tracker, K* = F/X on request", t);
         // Start values: least-squares fit of one noisy 50-sample period, in
         // f64 (soft-float on the M4F).
         let mut record = [0.0f64; 50];

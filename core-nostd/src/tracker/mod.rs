@@ -7,12 +7,16 @@
 //!   3.33, 3.32), several sensors sharing ω and σ (formulation B, eqs
 //!   3.43-3.45) and several modes, as an EKF or a UKF.
 //! - [`init`]: start values by least squares on the first pseudo-period.
+//! - [`sine`]: the two-state fixed-frequency tracker of a sine's complex
+//!   amplitude (eqs 3.24-3.26) and the instantaneous complex modulus of a
+//!   sine test (seed 000 eqs 1.1-1.3, Fig 1.24).
 //! - [`trig`]: sin and cos of the phase step without libm trig.
 //! - [`unscented`]: scalar unscented transform and linearisation (eqs
 //!   3.34-3.40), compared with Table 1 of §3.2.4 in `docs/unscented-table.md`.
 
 pub mod init;
 pub mod modal;
+pub mod sine;
 pub mod trig;
 pub mod unscented;
 
@@ -20,5 +24,9 @@ pub use init::{FirstPeriodFit, FitError, SensorFit, fit_amplitudes, fit_first_pe
 pub use modal::{
     Filter, Measured, ModalReport, ModalState, ModalTracker, ModeInit, ModeStatus, SensorSpec,
     Tuning, UtParams,
+};
+pub use sine::{
+    Channel, Modulus, ModulusSpec, ModulusState, ModulusTracker, Refused, SineSpec, SineState,
+    SineTracker,
 };
 pub use unscented::{ScalarUt, linearised_scalar, unscented_scalar};
