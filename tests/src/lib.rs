@@ -16,8 +16,8 @@ use bushing::{
     Real, ShiftFactor, XfBank, XfForm, XfSpec,
     stack::{FirstLoading, Relaxation, Sts, TurningPoints},
     tracker::{
-        Channel, Filter, Measured, ModalTracker, ModeInit, ModulusSpec, ModulusTracker,
-        SensorFit, SensorSpec, SineSpec, Tuning, UtParams, fit_first_period,
+        Channel, Filter, Measured, ModalTracker, ModeInit, ModulusSpec, ModulusTracker, SensorFit,
+        SensorSpec, SineSpec, Tuning, UtParams, fit_first_period,
     },
 };
 

@@ -11,11 +11,14 @@
 //!   amplitude (eqs 3.24-3.26) and the instantaneous complex modulus of a
 //!   sine test (seed 000 eqs 1.1-1.3, Fig 1.24).
 //! - [`trig`]: sin and cos of the phase step without libm trig.
+//! - [`relevance`]: the Iwan relevance check (eqs 7.17-7.18): damping
+//!   predicted from the frequency drop of a tracked curve, and the inverse.
 //! - [`unscented`]: scalar unscented transform and linearisation (eqs
 //!   3.34-3.40), compared with Table 1 of §3.2.4 in `docs/unscented-table.md`.
 
 pub mod init;
 pub mod modal;
+pub mod relevance;
 pub mod sine;
 pub mod trig;
 pub mod unscented;
@@ -24,6 +27,9 @@ pub use init::{FirstPeriodFit, FitError, SensorFit, fit_amplitudes, fit_first_pe
 pub use modal::{
     Filter, Measured, ModalReport, ModalState, ModalTracker, ModeInit, ModeStatus, SensorSpec,
     Tuning, UtParams,
+};
+pub use relevance::{
+    damping_from_frequency, damping_from_frequency_uniform, frequency_from_damping_uniform,
 };
 pub use sine::{
     Channel, Modulus, ModulusSpec, ModulusState, ModulusTracker, Refused, SineSpec, SineState,
