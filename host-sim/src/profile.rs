@@ -81,6 +81,16 @@ pub fn displacement(p: &ProfileSpec, t: f64) -> f64 {
     }
 }
 
+/// Frequency in Hz of the sine the profile imposes at time `t` (s), or
+/// `None` where it is not a sine (the instantaneous-modulus plot tracks the
+/// force and displacement at this frequency).
+pub fn frequency_at(p: &ProfileSpec, _t: f64) -> Option<f64> {
+    match *p {
+        ProfileSpec::Sine { frequency_hz, .. } => Some(frequency_hz),
+        ProfileSpec::Triangle { .. } => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
