@@ -8,6 +8,7 @@
 //! modulus of the Maxwell forms against the closed form.
 #![forbid(unsafe_code)]
 
+pub mod cost;
 pub mod fit;
 pub mod fractional_report;
 pub mod iwan_report;
@@ -17,6 +18,7 @@ pub mod profile;
 pub mod run;
 pub mod scene;
 pub mod svg;
+pub mod validate;
 pub mod xf_report;
 
 pub use scene::{Scene, SceneError};

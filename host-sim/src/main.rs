@@ -3,11 +3,13 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use bushing_sim::{Scene, fractional_report, iwan_report, modulus, run, xf_report};
+use bushing_sim::{Scene, cost, fractional_report, iwan_report, modulus, run, validate, xf_report};
 
 const USAGE: &str = "\
 usage:
-  bushing-sim run SCENE.toml --out DIR     simulate a scene: DIR/trace.csv, DIR/*.svg
+  bushing-sim run SCENE.toml --out DIR     simulate a scene: DIR/trace.csv, DIR/modulus.csv, DIR/*.svg
+  bushing-sim validate SCENE.toml          compare a scene with its closed-form references
+  bushing-sim cost SCENE.toml              ns per step of the scene against the sum of its parts
   bushing-sim maxwell-table [--out FILE]   complex-modulus error of every Maxwell form
   bushing-sim xf-table [--out FILE]        saturation of the x_f cell forms against the step
   bushing-sim iwan-table [--out FILE]      Iwan discretisations of the STS and Segalman laws
@@ -36,13 +38,28 @@ fn report(name: &str) -> Option<fn() -> String> {
     }
 }
 
+fn load(scene: &str) -> Result<Scene, String> {
+    Scene::load(&PathBuf::from(scene)).map_err(|e| e.to_string())
+}
+
 fn dispatch(args: &[String]) -> Result<(), String> {
     let words: Vec<&str> = args.iter().map(String::as_str).collect();
     match words.as_slice() {
         ["run", scene, "--out", out] | ["run", "--out", out, scene] => {
-            let scene = Scene::load(&PathBuf::from(scene)).map_err(|e| e.to_string())?;
-            let summary = run::run(&scene, &PathBuf::from(out))?;
+            let scene = load(scene)?;
+            let options = run::Options { progress: true };
+            let summary = run::run_with(&scene, &PathBuf::from(out), options)?;
             print!("{summary}");
+            Ok(())
+        }
+        ["validate", scene] => {
+            let scene = load(scene)?;
+            print!("{}", validate::validate(&scene)?);
+            Ok(())
+        }
+        ["cost", scene] => {
+            let scene = load(scene)?;
+            print!("{}", cost::cost(&scene)?);
             Ok(())
         }
         [name] | [name, "--out", _] if report(name).is_some() => {

@@ -1,5 +1,6 @@
 //! Run-time composition of a bushing from a scene: only the effects the
-//! scene lists are built; an absent effect is a `None` that is skipped.
+//! scene lists are built, kept in a list in the scene's order, and a step
+//! visits only those.
 
 use bushing::iwan::{self, ClampCell, SliderCell};
 use bushing::maxwell::{self, MaxwellCell};
@@ -231,20 +232,176 @@ pub type StsStack<T> = TurningPoints<Sts<T>, STACK_DEPTH>;
 /// Turning-point model with a measured K_f table.
 pub type TableStack<T> = TurningPoints<KfTable<T, TABLE_POINTS>, STACK_DEPTH>;
 
-/// The stack models a scene can name.
-pub type SceneStacks<T> = (Option<StsStack<T>>, Option<TableStack<T>>);
-/// The single friction cells a scene can name.
-pub type SceneFriction<T> = (Option<Dahl<T>>, Option<BoucWen<T>>, Option<Berg<T>>);
+/// One effect a scene can name, built.
+#[derive(Debug, Clone)]
+pub enum AnyEffect<T> {
+    /// Maxwell bank.
+    Maxwell(DynMaxwell<T>),
+    /// Iwan bank, clamp form.
+    Clamp(DynIwanClamp<T>),
+    /// Iwan bank, slider form.
+    Sliders(DynIwanSliders<T>),
+    /// x_f bank.
+    Xf(DynXf<T>),
+    /// Turning-point stack, STS law.
+    Sts(StsStack<T>),
+    /// Turning-point stack, measured table.
+    Table(TableStack<T>),
+    /// Dahl cell.
+    Dahl(Dahl<T>),
+    /// Bouc-Wen cell.
+    BoucWen(BoucWen<T>),
+    /// Berg cell.
+    Berg(Berg<T>),
+}
 
-/// The effects a scene can name, each present or not.
-pub type SceneEffects<T> = (
-    Option<DynMaxwell<T>>,
-    Option<DynIwanClamp<T>>,
-    Option<DynIwanSliders<T>>,
-    Option<DynXf<T>>,
-    SceneStacks<T>,
-    SceneFriction<T>,
-);
+/// State of one [`AnyEffect`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum AnyState<T: Real> {
+    /// Maxwell bank.
+    Maxwell(<DynMaxwell<T> as Effect<T>>::State),
+    /// Iwan bank, clamp form.
+    Clamp(<DynIwanClamp<T> as Effect<T>>::State),
+    /// Iwan bank, slider form.
+    Sliders(<DynIwanSliders<T> as Effect<T>>::State),
+    /// x_f bank.
+    Xf(<DynXf<T> as Effect<T>>::State),
+    /// Turning-point stack, STS law.
+    Sts(<StsStack<T> as Effect<T>>::State),
+    /// Turning-point stack, measured table.
+    Table(<TableStack<T> as Effect<T>>::State),
+    /// Dahl cell.
+    Dahl(<Dahl<T> as Effect<T>>::State),
+    /// Bouc-Wen cell.
+    BoucWen(<BoucWen<T> as Effect<T>>::State),
+    /// Berg cell.
+    Berg(<Berg<T> as Effect<T>>::State),
+}
+
+/// Calls `$f` with the effect inside an [`AnyEffect`] (one arm per kind).
+macro_rules! each_effect {
+    ($e:expr, |$x:ident| $f:expr) => {
+        match $e {
+            AnyEffect::Maxwell($x) => $f,
+            AnyEffect::Clamp($x) => $f,
+            AnyEffect::Sliders($x) => $f,
+            AnyEffect::Xf($x) => $f,
+            AnyEffect::Sts($x) => $f,
+            AnyEffect::Table($x) => $f,
+            AnyEffect::Dahl($x) => $f,
+            AnyEffect::BoucWen($x) => $f,
+            AnyEffect::Berg($x) => $f,
+        }
+    };
+}
+
+impl<T: Real> AnyEffect<T> {
+    fn fraction(&self) -> f64 {
+        each_effect!(self, |e| e.fraction())
+    }
+    fn check_dt(&self, dt: Option<f64>) -> Result<Option<f64>, ParamError> {
+        each_effect!(self, |e| e.check_dt(dt))
+    }
+    fn rest(&self, x0: T) -> AnyState<T> {
+        match self {
+            Self::Maxwell(e) => AnyState::Maxwell(e.rest(x0)),
+            Self::Clamp(e) => AnyState::Clamp(e.rest(x0)),
+            Self::Sliders(e) => AnyState::Sliders(e.rest(x0)),
+            Self::Xf(e) => AnyState::Xf(e.rest(x0)),
+            Self::Sts(e) => AnyState::Sts(e.rest(x0)),
+            Self::Table(e) => AnyState::Table(e.rest(x0)),
+            Self::Dahl(e) => AnyState::Dahl(e.rest(x0)),
+            Self::BoucWen(e) => AnyState::BoucWen(e.rest(x0)),
+            Self::Berg(e) => AnyState::Berg(e.rest(x0)),
+        }
+    }
+    #[inline(always)]
+    fn step(&self, state: &mut AnyState<T>, drive: &Drive<T>) -> EffectOutput<T> {
+        fn go<T: Real, E: Effect<T>>(e: &E, s: &mut E::State, d: &Drive<T>) -> EffectOutput<T> {
+            E::total(&e.step(s, d))
+        }
+        match (self, state) {
+            (Self::Maxwell(e), AnyState::Maxwell(s)) => go(e, s, drive),
+            (Self::Clamp(e), AnyState::Clamp(s)) => go(e, s, drive),
+            (Self::Sliders(e), AnyState::Sliders(s)) => go(e, s, drive),
+            (Self::Xf(e), AnyState::Xf(s)) => go(e, s, drive),
+            (Self::Sts(e), AnyState::Sts(s)) => go(e, s, drive),
+            (Self::Table(e), AnyState::Table(s)) => go(e, s, drive),
+            (Self::Dahl(e), AnyState::Dahl(s)) => go(e, s, drive),
+            (Self::BoucWen(e), AnyState::BoucWen(s)) => go(e, s, drive),
+            (Self::Berg(e), AnyState::Berg(s)) => go(e, s, drive),
+            // A state always comes from its own effect's `rest`.
+            _ => EffectOutput::zero(),
+        }
+    }
+}
+
+/// The effects a scene lists, in its order, and only those: one step
+/// visits each present effect once (no slot for an absent one).
+#[derive(Debug, Clone)]
+pub struct EffectList<T> {
+    effects: Vec<AnyEffect<T>>,
+}
+
+impl<T> EffectList<T> {
+    /// The effects, in the scene's order.
+    pub fn effects(&self) -> &[AnyEffect<T>] {
+        &self.effects
+    }
+}
+
+/// State of one effect of an [`EffectList`], with what its last step gave.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Slot<T: Real> {
+    /// The effect's state.
+    pub state: AnyState<T>,
+    /// Output of the effect's last step.
+    pub last: EffectOutput<T>,
+}
+
+impl<T: Real> Effect<T> for EffectList<T> {
+    type State = Vec<Slot<T>>;
+    /// The sum over the effects; each effect's own output is kept in its
+    /// [`Slot`] (see [`effect_outputs`]).
+    type Report = EffectOutput<T>;
+
+    fn fraction(&self) -> f64 {
+        self.effects.iter().map(AnyEffect::fraction).sum()
+    }
+    fn dt(&self) -> Option<f64> {
+        self.check_dt(None).ok().flatten()
+    }
+    fn check_dt(&self, dt: Option<f64>) -> Result<Option<f64>, ParamError> {
+        self.effects.iter().try_fold(dt, |dt, e| e.check_dt(dt))
+    }
+    fn rest(&self, x0: T) -> Self::State {
+        self.effects
+            .iter()
+            .map(|e| Slot {
+                state: e.rest(x0),
+                last: EffectOutput::zero(),
+            })
+            .collect()
+    }
+    #[inline(always)]
+    fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> EffectOutput<T> {
+        let mut total = EffectOutput::zero();
+        for (e, slot) in self.effects.iter().zip(state.iter_mut()) {
+            let out = e.step(&mut slot.state, drive);
+            slot.last = out;
+            total.force += out.force;
+            total.tangent += out.tangent;
+            total.dissipated += out.dissipated;
+        }
+        total
+    }
+    fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
+        *report
+    }
+}
+
+/// The effects a scene can name, as built for it.
+pub type SceneEffects<T> = EffectList<T>;
 
 /// A bushing built from a scene.
 pub type SceneBushing<T> = Bushing<T, AnyBackbone<T>, SceneEffects<T>>;
@@ -254,55 +411,43 @@ pub type SceneState<T> = BushingState<T, <SceneEffects<T> as Effect<T>>::State>;
 
 /// Builds the bushing a scene describes, with only its effects.
 pub fn build<T: Real>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
-    let (mut maxwell, mut clamp, mut sliders, mut xf) = (None, None, None, None);
-    let (mut sts, mut table) = (None, None);
-    let (mut dahl, mut bouc_wen, mut berg) = (None, None, None);
+    let mut effects = Vec::with_capacity(scene.effects.len());
     for e in &scene.effects {
-        match e {
+        effects.push(match e {
             EffectDesc::Maxwell {
                 form,
                 compensated,
                 cells,
-            } => maxwell = Some(DynMaxwell::new(*form, cells, scene.dt, *compensated)?),
+            } => AnyEffect::Maxwell(DynMaxwell::new(*form, cells, scene.dt, *compensated)?),
             EffectDesc::Iwan {
                 slider: false,
                 cells,
                 ..
-            } => clamp = Some(iwan_clamp(cells)?),
+            } => AnyEffect::Clamp(iwan_clamp(cells)?),
             EffectDesc::Iwan {
                 slider: true,
                 k_ref,
                 cells,
-            } => sliders = Some(iwan_sliders(cells, *k_ref)?),
-            EffectDesc::Xf { form, cells } => xf = Some(xf_bank(*form, cells, scene.dt)?),
+            } => AnyEffect::Sliders(iwan_sliders(cells, *k_ref)?),
+            EffectDesc::Xf { form, cells } => AnyEffect::Xf(xf_bank(*form, cells, scene.dt)?),
             EffectDesc::TurningPoints { law, first_loading } => match law {
                 Law::Sts { c, k1 } => {
-                    sts = Some(TurningPoints::new(Sts::new(*c, *k1)?, *first_loading))
+                    AnyEffect::Sts(TurningPoints::new(Sts::new(*c, *k1)?, *first_loading))
                 }
                 Law::Table { d, k } => {
-                    table = Some(TurningPoints::new(KfTable::new(d, k)?, *first_loading));
+                    AnyEffect::Table(TurningPoints::new(KfTable::new(d, k)?, *first_loading))
                 }
             },
             EffectDesc::Friction(Friction::Dahl(p)) => {
-                dahl = Some(Dahl::new(p.k_d, p.f_f, p.alpha)?);
+                AnyEffect::Dahl(Dahl::new(p.k_d, p.f_f, p.alpha)?)
             }
             EffectDesc::Friction(Friction::BoucWen(p)) => {
-                bouc_wen = Some(BoucWen::new(p.alpha, p.a, p.beta, p.gamma, p.n)?);
+                AnyEffect::BoucWen(BoucWen::new(p.alpha, p.a, p.beta, p.gamma, p.n)?)
             }
-            EffectDesc::Friction(Friction::Berg(p)) => berg = Some(Berg::new(p.f_max, p.x2)?),
-        }
+            EffectDesc::Friction(Friction::Berg(p)) => AnyEffect::Berg(Berg::new(p.f_max, p.x2)?),
+        });
     }
-    Bushing::new(
-        backbone(&scene.backbone)?,
-        (
-            maxwell,
-            clamp,
-            sliders,
-            xf,
-            (sts, table),
-            (dahl, bouc_wen, berg),
-        ),
-    )
+    Bushing::new(backbone(&scene.backbone)?, EffectList { effects })
 }
 
 /// Names of the effects present, in trace-column order.
@@ -310,34 +455,8 @@ pub fn effect_names(scene: &Scene) -> Vec<String> {
     scene.effects.iter().map(EffectDesc::name).collect()
 }
 
-/// Per-effect forces and energies of one step, in trace-column order.
-///
-/// A scene lists at most one effect of each kind and the trace columns
-/// follow the scene's order, so outputs are matched by kind.
-pub fn effect_outputs<T: Real>(
-    scene: &Scene,
-    report: &<SceneEffects<T> as Effect<T>>::Report,
-) -> Vec<EffectOutput<T>> {
-    let (maxwell, clamp, sliders, xf, (sts, table), (dahl, bouc_wen, berg)) = report;
-    scene
-        .effects
-        .iter()
-        .filter_map(|e| match e {
-            EffectDesc::Maxwell { .. } => *maxwell,
-            EffectDesc::Iwan { slider: false, .. } => *clamp,
-            EffectDesc::Iwan { slider: true, .. } => *sliders,
-            EffectDesc::Xf { .. } => *xf,
-            EffectDesc::TurningPoints {
-                law: Law::Sts { .. },
-                ..
-            } => *sts,
-            EffectDesc::TurningPoints {
-                law: Law::Table { .. },
-                ..
-            } => *table,
-            EffectDesc::Friction(Friction::Dahl(_)) => *dahl,
-            EffectDesc::Friction(Friction::BoucWen(_)) => *bouc_wen,
-            EffectDesc::Friction(Friction::Berg(_)) => *berg,
-        })
-        .collect()
+/// Per-effect forces and energies of the last step, in trace-column order
+/// (the scene's order).
+pub fn effect_outputs<T: Real>(state: &SceneState<T>) -> Vec<EffectOutput<T>> {
+    state.effects().iter().map(|slot| slot.last).collect()
 }

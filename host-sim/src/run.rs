@@ -1,17 +1,66 @@
-//! Running a scene: step the bushing over the profile, write the trace and
-//! the plots, and measure the cost of the steps alone.
+//! Running a scene: step the bushing over the profile, write the trace,
+//! the modulus points and the plots, and measure the cost of the steps
+//! alone.
+//!
+//! Plots (SVG, axes labelled with units):
+//!
+//! - `force-displacement.svg`: total force and long-term elastic branch
+//!   against displacement;
+//! - `force-time.svg`: total force, elastic branch and each effect's force
+//!   against time;
+//! - `dissipated-power.svg`: two panels against time, the power each step
+//!   dissipates (its energy over dt, in mW = N·mm/s) and the cumulative
+//!   energy (mJ), total and per effect;
+//! - `modulus-amplitude.svg` (profiles with sine portions only): the
+//!   instantaneous complex modulus against the imposed amplitude, in the
+//!   style of seed 000 Fig 1.24, also written as `modulus.csv`.
+//!
+//! Long runs are decimated for the time plots by keeping the smallest and
+//! the largest value of each of a few thousand buckets, so that an
+//! oscillation too fast to draw shows as its envelope instead of aliasing.
 
+use std::collections::VecDeque;
 use std::fs;
-use std::io::{BufWriter, Write};
+use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use bushing::Real;
+use bushing::tracker::{Channel, ModulusSpec, ModulusState, ModulusTracker, SineSpec};
 
 use crate::model::{self, SceneBushing};
 use crate::profile;
 use crate::scene::{NumberType, Scene};
-use crate::svg::{Plot, Series};
+use crate::svg::{self, Plot, Series};
+
+/// One point of the instantaneous-modulus plot: the tracked complex
+/// modulus at the end of one tracked period.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModulusPoint {
+    /// Time of the tracked sample, s.
+    pub time_s: f64,
+    /// Frequency of the imposed sine, Hz.
+    pub frequency_hz: f64,
+    /// Imposed amplitude, mm.
+    pub amplitude_mm: f64,
+    /// Mean displacement over the last period (the preload), mm.
+    pub mean_mm: f64,
+    /// Storage modulus K', N/mm.
+    pub storage: f64,
+    /// Loss modulus K'', N/mm.
+    pub loss: f64,
+}
+
+impl ModulusPoint {
+    /// Loss factor K''/K' (NaN when K' is zero).
+    pub fn loss_factor(&self) -> f64 {
+        if self.storage == 0.0 {
+            f64::NAN
+        } else {
+            self.loss / self.storage
+        }
+    }
+}
 
 /// What a run measured.
 #[derive(Debug, Clone)]
@@ -30,6 +79,8 @@ pub struct Summary {
     pub peak_force: f64,
     /// Steps refused for non-finite or out-of-range input.
     pub refused: u32,
+    /// Instantaneous-modulus points (empty without sine portions).
+    pub modulus: Vec<ModulusPoint>,
     /// Files written.
     pub files: Vec<PathBuf>,
 }
@@ -52,6 +103,9 @@ impl std::fmt::Display for Summary {
         writeln!(f, "dissipated     {:.6e} mJ", self.dissipated_mj)?;
         writeln!(f, "peak |force|   {:.6e} N", self.peak_force)?;
         writeln!(f, "refused steps  {}", self.refused)?;
+        if !self.modulus.is_empty() {
+            writeln!(f, "modulus points {}", self.modulus.len())?;
+        }
         for file in &self.files {
             writeln!(f, "wrote          {}", file.display())?;
         }
@@ -59,20 +113,43 @@ impl std::fmt::Display for Summary {
     }
 }
 
-/// Runs `scene`, writing `trace.csv` and the plots into `out`.
+/// How to run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Options {
+    /// Show a progress bar on stderr for long runs (more than a million
+    /// steps, or more than about a second expected), at most ten updates a
+    /// second, when stderr is a terminal. Off by default: the command line
+    /// turns it on, library callers and tests do not.
+    pub progress: bool,
+}
+
+/// Runs `scene`, writing the trace, the modulus points and the plots into
+/// `out`, without a progress bar.
 pub fn run(scene: &Scene, out: &Path) -> Result<Summary, String> {
+    run_with(scene, out, Options::default())
+}
+
+/// Runs `scene` with `options`.
+pub fn run_with(scene: &Scene, out: &Path, options: Options) -> Result<Summary, String> {
     match scene.number {
-        NumberType::F32 => run_typed::<f32>(scene, out),
-        NumberType::F64 => run_typed::<f64>(scene, out),
+        NumberType::F32 => run_typed::<f32>(scene, out, options),
+        NumberType::F64 => run_typed::<f64>(scene, out, options),
     }
 }
 
-/// Points kept for the plots.
+/// Points kept for the force-displacement plot.
 const PLOT_POINTS: u64 = 20_000;
+/// Buckets of the time plots (two points each).
+const TIME_BUCKETS: u64 = 4_000;
 /// Steps per timed chunk.
 const CHUNK: usize = 4096;
 
-fn run_typed<T: Real>(scene: &Scene, out: &Path) -> Result<Summary, String> {
+/// The name of an effect's trace column, without the `_N` suffix.
+pub fn column_name(effect: &str) -> String {
+    effect.replace([' ', ','], "_")
+}
+
+fn run_typed<T: Real>(scene: &Scene, out: &Path, options: Options) -> Result<Summary, String> {
     let bushing: SceneBushing<T> = model::build(scene).map_err(|e| e.to_string())?;
     fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let trace_path = out.join("trace.csv");
@@ -82,7 +159,7 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path) -> Result<Summary, String> {
     let names = model::effect_names(scene);
     let mut header = String::from("time_s,x_mm,force_N,elastic_N");
     for n in &names {
-        header.push_str(&format!(",{}_N", n.replace([' ', ','], "_")));
+        header.push_str(&format!(",{}_N", column_name(n)));
     }
     header.push_str(",dissipated_mJ");
     writeln!(csv, "{header}").map_err(|e| e.to_string())?;
@@ -91,13 +168,21 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path) -> Result<Summary, String> {
     let stride = steps.div_ceil(PLOT_POINTS).max(1);
     let mut loop_points = Vec::new();
     let mut elastic_points = Vec::new();
+    let bucket = steps.div_ceil(TIME_BUCKETS).max(1);
+    let mut force_t = Envelopes::new(names.len() + 2, bucket);
+    let mut power_t = Envelopes::new(names.len() + 1, bucket);
+    let mut energy_t = Envelopes::new(names.len() + 1, bucket);
+    let mut effect_energy = vec![0.0f64; names.len()];
     let x0 = profile::displacement(&scene.profile, 0.0);
+    let (_, k0) = bushing::Backbone::eval(bushing.backbone(), T::from_f64(x0));
+    let mut probe = ModulusProbe::new(scene.dt, k0.to_f64());
     let mut state = bushing.state_at(T::from_f64(x0));
     let mut inputs = Vec::with_capacity(CHUNK);
     let mut outputs = Vec::with_capacity(CHUNK);
     let mut busy = 0.0f64;
     let mut energy = 0.0f64;
     let mut peak = 0.0f64;
+    let mut progress = Progress::new(options.progress && std::io::stderr().is_terminal(), steps);
     let mut n = 0u64;
     while n < steps {
         let len = (steps - n).min(CHUNK as u64) as usize;
@@ -116,19 +201,30 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path) -> Result<Summary, String> {
         for (k, (x, o)) in inputs.iter().zip(&outputs).enumerate() {
             let i = n + 1 + k as u64;
             let t = i as f64 * scene.dt;
-            energy += o.dissipated.to_f64();
+            let step_energy = o.dissipated.to_f64();
+            energy += step_energy;
             let f = o.force.to_f64();
+            let xf = x.to_f64();
+            let elastic = o.elastic.to_f64();
             peak = peak.max(f.abs());
             line.clear();
-            line.push_str(&format!(
-                "{t:.9},{:e},{f:e},{:e}",
-                x.to_f64(),
-                o.elastic.to_f64()
-            ));
+            line.push_str(&format!("{t:.9},{xf:e},{f:e},{elastic:e}"));
+            force_t.push(0, t, f);
+            force_t.push(1, t, elastic);
+            power_t.push(0, t, step_energy / scene.dt);
+            energy_t.push(0, t, energy);
             match &o.effects {
-                Some(r) => {
-                    for e in model::effect_outputs::<T>(scene, r) {
-                        line.push_str(&format!(",{:e}", e.force.to_f64()));
+                Some(_) => {
+                    let parts = model::effect_outputs::<T>(&state);
+                    for (j, e) in parts.iter().enumerate() {
+                        let (ef, ed) = (e.force.to_f64(), e.dissipated.to_f64());
+                        line.push_str(&format!(",{ef:e}"));
+                        force_t.push(j + 2, t, ef);
+                        power_t.push(j + 1, t, ed / scene.dt);
+                        if let Some(total) = effect_energy.get_mut(j) {
+                            *total += ed;
+                            energy_t.push(j + 1, t, *total);
+                        }
                     }
                 }
                 None => names.iter().for_each(|_| line.push_str(",nan")),
@@ -136,12 +232,17 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path) -> Result<Summary, String> {
             line.push_str(&format!(",{energy:e}"));
             writeln!(csv, "{line}").map_err(|e| e.to_string())?;
             if i.is_multiple_of(stride) {
-                loop_points.push((x.to_f64(), f));
-                elastic_points.push((x.to_f64(), o.elastic.to_f64()));
+                loop_points.push((xf, f));
+                elastic_points.push((xf, elastic));
             }
+            let sine = profile::frequency_at(&scene.profile, t)
+                .map(|fr| (fr, profile::amplitude_at(&scene.profile, t)));
+            probe.push(sine, t, xf, f);
         }
         n += len as u64;
+        progress.update(n);
     }
+    progress.finish();
     csv.flush().map_err(|e| e.to_string())?;
 
     let effects = if names.is_empty() {
@@ -149,7 +250,22 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path) -> Result<Summary, String> {
     } else {
         names.join(" + ")
     };
-    let plot = Plot {
+    let title = |what: &str| {
+        if scene.title.is_empty() {
+            format!("{what} ({effects})")
+        } else {
+            format!("{what}: {}", scene.title)
+        }
+    };
+    let mut files = vec![trace_path];
+    let write = |files: &mut Vec<PathBuf>, name: &str, text: String| {
+        let path = out.join(name);
+        fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+        files.push(path);
+        Ok::<(), String>(())
+    };
+
+    let loop_plot = Plot {
         title: if scene.title.is_empty() {
             format!("Force-displacement ({effects})")
         } else {
@@ -157,19 +273,78 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path) -> Result<Summary, String> {
         },
         x_label: "displacement x [mm]".into(),
         y_label: "force F [N]".into(),
+        x_log: false,
         series: vec![
-            Series {
-                name: format!("total force, {effects}, {}", scene.number.name()),
-                points: loop_points,
-            },
-            Series {
-                name: "long-term elastic branch g0 F_inf(x)".into(),
-                points: elastic_points,
-            },
+            Series::line(
+                format!("total force, {effects}, {}", scene.number.name()),
+                loop_points,
+            ),
+            Series::line("long-term elastic branch g0 F_inf(x)", elastic_points),
         ],
     };
-    let loop_path = out.join("force-displacement.svg");
-    fs::write(&loop_path, plot.render()).map_err(|e| format!("{}: {e}", loop_path.display()))?;
+    write(&mut files, "force-displacement.svg", loop_plot.render())?;
+
+    let mut force_series = force_t.finish().into_iter();
+    let mut series = vec![
+        Series::line("total force", force_series.next().unwrap_or_default()),
+        Series::line(
+            "long-term elastic branch g0 F_inf(x)",
+            force_series.next().unwrap_or_default(),
+        ),
+    ];
+    for (name, points) in names.iter().zip(force_series) {
+        series.push(Series::line(name.clone(), points));
+    }
+    let force_plot = Plot {
+        title: title("Force against time"),
+        x_label: "time t [s]".into(),
+        y_label: "force F [N]".into(),
+        x_log: false,
+        series,
+    };
+    write(&mut files, "force-time.svg", force_plot.render())?;
+
+    let per_effect = |all: Vec<Vec<(f64, f64)>>, total: &str| {
+        let mut it = all.into_iter();
+        let mut series = vec![Series::line(total, it.next().unwrap_or_default())];
+        // With one effect its curve is the total's.
+        if names.len() > 1 {
+            for (name, points) in names.iter().zip(it) {
+                series.push(Series::line(name.clone(), points));
+            }
+        }
+        series
+    };
+    let power = Plot {
+        title: title("Dissipated power"),
+        x_label: "time t [s]".into(),
+        y_label: "dissipated power P [mW = N·mm/s]".into(),
+        x_log: false,
+        series: per_effect(power_t.finish(), "total, energy of each step / dt"),
+    };
+    let cumulative = Plot {
+        title: title("Cumulative dissipated energy"),
+        x_label: "time t [s]".into(),
+        y_label: "dissipated energy E [mJ = N·mm]".into(),
+        x_log: false,
+        series: per_effect(energy_t.finish(), "total"),
+    };
+    write(
+        &mut files,
+        "dissipated-power.svg",
+        svg::render_panels(&[power, cumulative]),
+    )?;
+
+    let modulus = probe.finish();
+    if probe.saw_sine {
+        write(&mut files, "modulus.csv", modulus_csv(&modulus))?;
+        write(
+            &mut files,
+            "modulus-amplitude.svg",
+            modulus_plot(&modulus, &title("Instantaneous complex modulus")).render(),
+        )?;
+    }
+
     Ok(Summary {
         steps,
         effects: names,
@@ -178,6 +353,476 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path) -> Result<Summary, String> {
         dissipated_mj: energy,
         peak_force: peak,
         refused: state.rejected(),
-        files: vec![trace_path, loop_path],
+        modulus,
+        files,
     })
+}
+
+/// `modulus.csv`: one row per point.
+pub fn modulus_csv(points: &[ModulusPoint]) -> String {
+    let mut s =
+        String::from("frequency_hz,amplitude_mm,storage_N_per_mm,loss_N_per_mm,loss_factor\n");
+    for p in points {
+        s.push_str(&format!(
+            "{:e},{:e},{:e},{:e},{:e}\n",
+            p.frequency_hz,
+            p.amplitude_mm,
+            p.storage,
+            p.loss,
+            p.loss_factor()
+        ));
+    }
+    s
+}
+
+/// Storage and loss moduli against the imposed amplitude, one pair of
+/// series per frequency and mean displacement (seed 000 Fig 1.24); the
+/// amplitude axis is logarithmic when the amplitudes span more than a
+/// factor 3.
+pub fn modulus_plot(points: &[ModulusPoint], title: &str) -> Plot {
+    // Means within 1 µm are one preload (+ 0.0 turns -0 into 0).
+    let key = |p: &ModulusPoint| (p.frequency_hz, (p.mean_mm * 1e3).round() / 1e3 + 0.0);
+    let mut groups: Vec<(f64, f64)> = Vec::new();
+    for p in points {
+        if !groups.contains(&key(p)) {
+            groups.push(key(p));
+        }
+    }
+    let preloads = {
+        let mut m: Vec<f64> = groups.iter().map(|g| g.1).collect();
+        m.dedup();
+        m.sort_by(f64::total_cmp);
+        m.dedup();
+        m.len()
+    };
+    let mut series = Vec::new();
+    for g in groups {
+        let at = || points.iter().filter(move |p| key(p) == g);
+        let label = if preloads > 1 {
+            format!("{} Hz, mean x {} mm", g.0, g.1)
+        } else {
+            format!("{} Hz", g.0)
+        };
+        series.push(Series::markers(
+            format!("storage K' at {label}"),
+            at().map(|p| (p.amplitude_mm, p.storage)).collect(),
+        ));
+        series.push(Series::markers(
+            format!("loss K'' at {label}"),
+            at().map(|p| (p.amplitude_mm, p.loss)).collect(),
+        ));
+    }
+    let (lo, hi) = points
+        .iter()
+        .map(|p| p.amplitude_mm)
+        .filter(|a| *a > 0.0 && a.is_finite())
+        .fold((f64::INFINITY, 0.0f64), |(l, h), a| (l.min(a), h.max(a)));
+    let title = if points.is_empty() {
+        format!("{title} (no sine held at one frequency for 3 periods)")
+    } else {
+        title.to_string()
+    };
+    Plot {
+        title,
+        x_label: "imposed amplitude X [mm]".into(),
+        y_label: "modulus K', K'' [N/mm]".into(),
+        x_log: hi > 3.0 * lo,
+        series,
+    }
+}
+
+/// Time-plot decimation: the smallest and the largest value of each bucket
+/// of `bucket` samples, in time order.
+struct Envelopes {
+    bucket: u64,
+    series: Vec<Envelope>,
+}
+
+#[derive(Default)]
+struct Envelope {
+    count: u64,
+    lo: (f64, f64),
+    hi: (f64, f64),
+    points: Vec<(f64, f64)>,
+}
+
+impl Envelope {
+    fn flush(&mut self) {
+        if self.count == 0 {
+            return;
+        }
+        let (a, b) = if self.lo.0 <= self.hi.0 {
+            (self.lo, self.hi)
+        } else {
+            (self.hi, self.lo)
+        };
+        self.points.push(a);
+        if b != a {
+            self.points.push(b);
+        }
+        self.count = 0;
+    }
+}
+
+impl Envelopes {
+    fn new(n: usize, bucket: u64) -> Self {
+        Self {
+            bucket,
+            series: (0..n).map(|_| Envelope::default()).collect(),
+        }
+    }
+
+    fn push(&mut self, series: usize, t: f64, v: f64) {
+        let Some(e) = self.series.get_mut(series) else {
+            return;
+        };
+        if e.count == 0 {
+            (e.lo, e.hi) = ((t, v), (t, v));
+        } else if v < e.lo.1 {
+            e.lo = (t, v);
+        } else if v > e.hi.1 {
+            e.hi = (t, v);
+        }
+        e.count += 1;
+        if e.count >= self.bucket {
+            e.flush();
+        }
+    }
+
+    fn finish(mut self) -> Vec<Vec<(f64, f64)>> {
+        self.series
+            .iter_mut()
+            .map(|e| {
+                e.flush();
+                std::mem::take(&mut e.points)
+            })
+            .collect()
+    }
+}
+
+/// Tracking bandwidth of the modulus tracker as a fraction of the test
+/// frequency: its memory is about 1/(2π · 0.2) = 0.8 period, short enough
+/// to follow a stepped amplitude within a few periods.
+pub const TRACK_BANDWIDTH: f64 = 0.2;
+/// Tracked periods skipped before the first modulus point.
+pub const SKIPPED_PERIODS: u64 = 2;
+/// Longest period tracked, in samples (the running mean keeps one period).
+pub const MAX_PERIOD_SAMPLES: f64 = 2_097_152.0;
+
+/// The on-line instantaneous modulus of the run (seed 000 Fig 1.24), with
+/// the library's [`ModulusTracker`] on x and F at the frequency the profile
+/// imposes.
+///
+/// The tracker has no mean state, and a constant or slowly moving offset
+/// (a preload, the relaxation of slow cells after a start from rest) would
+/// leak into the complex amplitudes. So both signals go through a running
+/// mean over exactly one period (fractional end weight), and the tracker
+/// is fed the sample at the middle of that window minus the mean: a
+/// constant or a linear drift cancels exactly, a steady sine passes
+/// unchanged. The delay of half a period is the same on both channels, so
+/// it cancels in F/X. The tracker starts when the first window is full (one
+/// period into the sine) and is restarted whenever the frequency changes;
+/// one point is taken at the end of every tracked period after the first
+/// [`SKIPPED_PERIODS`]. Sines of fewer than 2 or more than
+/// [`MAX_PERIOD_SAMPLES`] samples per period are not tracked.
+pub struct ModulusProbe {
+    dt: f64,
+    /// Backbone tangent where the run starts, N/mm: scale of the force.
+    stiffness: f64,
+    frequency: Option<f64>,
+    /// Samples per period.
+    period: f64,
+    /// (t, x, F, imposed amplitude or NaN).
+    window: VecDeque<(f64, f64, f64, f64)>,
+    sums: (f64, f64),
+    tracker: Option<(ModulusTracker<f64>, ModulusState<f64>)>,
+    /// The tracker could not be built for this frequency.
+    dead: bool,
+    fed: u64,
+    next_point: u64,
+    points: Vec<ModulusPoint>,
+    /// Some sample had a sine frequency.
+    pub saw_sine: bool,
+}
+
+impl ModulusProbe {
+    /// A probe for time step `dt` on a bushing of tangent `stiffness`.
+    pub fn new(dt: f64, stiffness: f64) -> Self {
+        Self {
+            dt,
+            stiffness: if stiffness.is_finite() && stiffness > 0.0 {
+                stiffness
+            } else {
+                1.0
+            },
+            frequency: None,
+            period: 0.0,
+            window: VecDeque::new(),
+            sums: (0.0, 0.0),
+            tracker: None,
+            dead: false,
+            fed: 0,
+            next_point: SKIPPED_PERIODS,
+            points: Vec::new(),
+            saw_sine: false,
+        }
+    }
+
+    /// One sample at time `t`: displacement `x` (mm) and force `f` (N), with
+    /// the frequency and the amplitude of the sine imposed then, if any
+    /// (without an amplitude, the tracked displacement amplitude is used).
+    pub fn push(&mut self, sine: Option<(f64, Option<f64>)>, t: f64, x: f64, f: f64) {
+        let (frequency, amplitude) = match sine {
+            Some((f, a)) => (Some(f), a),
+            None => (None, None),
+        };
+        let changed = match (frequency, self.frequency) {
+            (Some(a), Some(b)) => (a - b).abs() > 1e-12 * b.abs(),
+            (None, None) => false,
+            _ => true,
+        };
+        if changed {
+            self.restart(frequency);
+        }
+        if self.frequency.is_none() || self.dead {
+            return;
+        }
+        self.saw_sine = true;
+        if !(x.is_finite() && f.is_finite()) {
+            return;
+        }
+        let whole = self.period.floor();
+        let frac = self.period - whole;
+        let len = whole as usize + 1;
+        self.window
+            .push_back((t, x, f, amplitude.unwrap_or(f64::NAN)));
+        self.sums.0 += x;
+        self.sums.1 += f;
+        if self.window.len() > len
+            && let Some((_, ox, of, _)) = self.window.pop_front()
+        {
+            self.sums.0 -= ox;
+            self.sums.1 -= of;
+        }
+        if self.window.len() < len {
+            return;
+        }
+        let Some(&(_, ox, of, _)) = self.window.front() else {
+            return;
+        };
+        let mean = (
+            (self.sums.0 - (1.0 - frac) * ox) / self.period,
+            (self.sums.1 - (1.0 - frac) * of) / self.period,
+        );
+        if self.tracker.is_none() && !self.start(mean) {
+            self.dead = true;
+            return;
+        }
+        let Some(&(tc, xc, fc, ac)) = self.window.get(len / 2) else {
+            return;
+        };
+        let Some((tracker, state)) = &mut self.tracker else {
+            return;
+        };
+        if tracker.step(state, xc - mean.0, fc - mean.1).is_err() {
+            return;
+        }
+        self.fed += 1;
+        // One sample early at most: a step of whole periods that ends on a
+        // rest still gets its last point.
+        if self.fed as f64 + 1.0 >= self.next_point as f64 * self.period {
+            self.next_point += 1;
+            if let Some(m) = tracker.modulus(state) {
+                let (ax, bx) = state.displacement();
+                self.points.push(ModulusPoint {
+                    time_s: tc,
+                    frequency_hz: tracker.frequency(),
+                    amplitude_mm: if ac.is_finite() { ac } else { ax.hypot(bx) },
+                    mean_mm: mean.0,
+                    storage: m.storage,
+                    loss: m.loss,
+                });
+            }
+        }
+    }
+
+    fn restart(&mut self, frequency: Option<f64>) {
+        self.frequency = frequency.filter(|f| f.is_finite() && *f > 0.0);
+        self.period = self.frequency.map_or(0.0, |f| 1.0 / (f * self.dt));
+        self.dead =
+            !(self.period.is_finite() && self.period >= 2.0 && self.period <= MAX_PERIOD_SAMPLES);
+        self.window.clear();
+        self.sums = (0.0, 0.0);
+        self.tracker = None;
+        self.fed = 0;
+        self.next_point = SKIPPED_PERIODS;
+    }
+
+    /// Builds the tracker once the first window is full, with the
+    /// amplitudes seen in it; false if it cannot be built.
+    fn start(&mut self, mean: (f64, f64)) -> bool {
+        let Some(frequency) = self.frequency else {
+            return false;
+        };
+        let (ax, af) = self.window.iter().fold((0.0f64, 0.0f64), |(a, b), s| {
+            (a.max((s.1 - mean.0).abs()), b.max((s.2 - mean.1).abs()))
+        });
+        if !(ax > 0.0 && ax.is_finite()) {
+            return false;
+        }
+        let af = if af > 0.0 && af.is_finite() {
+            af
+        } else {
+            self.stiffness * ax
+        };
+        let spec = ModulusSpec {
+            sine: SineSpec {
+                frequency,
+                bandwidth: TRACK_BANDWIDTH * frequency,
+            },
+            displacement: Channel {
+                noise: 1e-4 * ax,
+                amplitude: ax,
+            },
+            force: Channel {
+                noise: 1e-4 * af,
+                amplitude: af,
+            },
+            min_snr: 10.0,
+        };
+        match ModulusTracker::<f64>::new(self.dt, &spec) {
+            Ok(t) => {
+                let s = t.start();
+                self.tracker = Some((t, s));
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    /// The points taken.
+    pub fn finish(&self) -> Vec<ModulusPoint> {
+        self.points.clone()
+    }
+}
+
+/// A progress bar on stderr.
+struct Progress {
+    enabled: bool,
+    shown: bool,
+    total: u64,
+    start: Instant,
+    last: Instant,
+}
+
+/// Runs above this many steps show the bar from the start.
+const LONG_RUN: u64 = 1_000_000;
+const REFRESH: Duration = Duration::from_millis(100);
+
+impl Progress {
+    fn new(enabled: bool, total: u64) -> Self {
+        let now = Instant::now();
+        Self {
+            enabled,
+            shown: false,
+            total,
+            start: now,
+            last: now,
+        }
+    }
+
+    fn update(&mut self, done: u64) {
+        if !self.enabled || done >= self.total {
+            return;
+        }
+        let now = Instant::now();
+        if now.duration_since(self.last) < REFRESH {
+            return;
+        }
+        let elapsed = now.duration_since(self.start).as_secs_f64();
+        let expected = elapsed * self.total as f64 / done.max(1) as f64;
+        if !self.shown && self.total <= LONG_RUN && expected < 1.0 {
+            return;
+        }
+        self.shown = true;
+        self.last = now;
+        let fraction = done as f64 / self.total.max(1) as f64;
+        let filled = (fraction * 30.0) as usize;
+        let bar: String = (0..30)
+            .map(|i| if i < filled { '#' } else { '-' })
+            .collect();
+        let mut err = std::io::stderr().lock();
+        let _ = write!(
+            err,
+            "\r[{bar}] {:5.1} % {done}/{} steps, {:.0} s left   ",
+            100.0 * fraction,
+            self.total,
+            (expected - elapsed).max(0.0)
+        );
+        let _ = err.flush();
+    }
+
+    fn finish(&mut self) {
+        if self.shown {
+            let mut err = std::io::stderr().lock();
+            let _ = write!(err, "\r{:79}\r", "");
+            let _ = err.flush();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn envelopes_keep_extremes_in_time_order() {
+        let mut e = Envelopes::new(1, 4);
+        for (i, v) in [0.0, 3.0, -2.0, 1.0, 5.0, 5.0].into_iter().enumerate() {
+            e.push(0, i as f64, v);
+        }
+        let [points] = e.finish().try_into().unwrap();
+        assert_eq!(points, vec![(1.0, 3.0), (2.0, -2.0), (4.0, 5.0)]);
+        let mut one = Envelopes::new(1, 1);
+        one.push(0, 0.0, 1.0);
+        one.push(0, 1.0, 2.0);
+        assert_eq!(one.finish()[0], vec![(0.0, 1.0), (1.0, 2.0)]);
+    }
+
+    /// A linear spring with a viscous term and an offset on a drifting
+    /// preload: K' = k, K'' = c ω exactly, whatever the drift.
+    #[test]
+    fn probe_removes_offsets_and_drifts() {
+        let (dt, f, k, c) = (1e-3, 7.0, 120.0, 0.8);
+        let w = std::f64::consts::TAU * f;
+        let mut probe = ModulusProbe::new(dt, k);
+        for i in 1..=5000 {
+            let t = i as f64 * dt;
+            let drift = 3.0 + 0.5 * t;
+            let x = drift + 0.2 * (w * t).sin();
+            let force = 40.0 + k * x + c * 0.2 * w * (w * t).cos() + 9.0 * t;
+            probe.push(Some((f, None)), t, x, force);
+        }
+        let points = probe.finish();
+        // 35 periods, 2 skipped and one to fill the window.
+        assert!(points.len() >= 30, "{}", points.len());
+        for p in &points {
+            assert!((p.amplitude_mm / 0.2 - 1.0).abs() < 1e-3, "{p:?}");
+            assert!((p.storage / k - 1.0).abs() < 1e-3, "{p:?}");
+            assert!((p.loss / (c * w) - 1.0).abs() < 1e-2, "{p:?}");
+        }
+        // The imposed amplitude, when given, is the point's.
+        let mut probe = ModulusProbe::new(dt, k);
+        for i in 1..=1000 {
+            let t = i as f64 * dt;
+            let x = 0.2 * (w * t).sin();
+            probe.push(Some((f, Some(0.25))), t, x, k * x);
+        }
+        let points = probe.finish();
+        assert!(!points.is_empty() && points.iter().all(|p| p.amplitude_mm == 0.25));
+        // No sine, no point; a new frequency restarts.
+        let mut probe = ModulusProbe::new(dt, k);
+        probe.push(None, 0.0, 0.0, 0.0);
+        assert!(!probe.saw_sine && probe.finish().is_empty());
+    }
 }

@@ -71,7 +71,7 @@ fn a_scene_with_no_effects_builds_none_and_dissipates_nothing() {
     let scene = Scene::parse("bare.toml", &bare).unwrap();
     assert!(scene.effects.is_empty());
     let b = bushing_sim::model::build::<f64>(&scene).unwrap();
-    assert!(b.effects().0.is_none());
+    assert!(b.effects().effects().is_empty());
     assert_eq!(b.g0(), 1.0);
     let out = std::env::temp_dir().join(format!("bushing-bare-{}", std::process::id()));
     let summary = run::run(&scene, &out).unwrap();

@@ -1,0 +1,776 @@
+//! `validate`: a scene against its closed-form references, where one
+//! exists.
+//!
+//! The scene is stepped as `run` steps it, in its own number type, and each
+//! effect's force and dissipated energy are taken over the last whole
+//! cycles of a periodic profile (a sine or a triangle, symmetric about the
+//! preload). The first cycle is never used: it holds the first loading.
+//!
+//! | effect | check | reference |
+//! |---|---|---|
+//! | Maxwell (sine, linear backbone K^∞) | first-harmonic K', K'' of `g^0 K^∞ x` + the bank's force, least squares over the last whole periods | `K^∞ (g^0 + Σ H_i(e^{iωΔt}))`, the discrete bank's exact steady state, and eq 1.8 of seed 000, `K^∞ (g^0 + Σ g_i iω / (iω + ω_i))` |
+//! | Maxwell | energy per steady cycle | `π X² K''` of the bank |
+//! | Iwan (clamp on a linear backbone, or slider) | energy per steady cycle | Masing loop of each Jenkins cell: `Σ 4 F_f,i (A - x_f,i)` over the cells that slip, `x_f,i = F_f,i / (g_i k)` with k the backbone slope (clamp) or k_ref (slider) |
+//! | Iwan | half the peak-to-peak force of the steady loop | `Σ min(F_f,i, g_i k A)` |
+//! | turning points | half peak-to-peak force, energy per cycle | Masing loop of the law: `H(2A)/2` and `2 ∫_0^{2A} H - 2A H(2A)` |
+//! | x_f (linear backbone; triangle, or sine with ω_i = 0) | half peak-to-peak force | each cell is Dahl's law of exponent 1 in x with `λ = ω/v + 1/x_f`, saturation `g K^∞ / λ` (`g K^∞ x_f` at ω = 0): tip `g K^∞ tanh(λ A) / λ` |
+//! | Dahl | half peak-to-peak force | saturation `f_f`; loop tip `f_f tanh(k_d A / f_f)` (α = 1), else the root of the closed-form travel |
+//! | Bouc-Wen | half peak-to-peak force | ultimate force `α w_u`; loop tip from the travel `∫ dw / (A - (γ + β sgn w) \|w\|^n) = 2A` |
+//! | Berg | half peak-to-peak force | `f_max`; loop tip, root of `(x_2 / f_max) r² + (x_2 + A) r - A f_max = 0` |
+//!
+//! A is the amplitude of the profile and v the speed of a triangle. The
+//! friction laws never reach their saturation force in a finite travel
+//! (Dahl with α < 1 does), so the reference is the tip of the steady loop
+//! of the continuous law at the profile's amplitude; the saturation force
+//! is printed with it.
+
+use std::f64::consts::{PI, TAU};
+use std::fmt;
+
+use bushing::{BoucWen, KfTable, MaxwellBank, MaxwellForm, MaxwellSpec, Real, Relaxation, Sts};
+
+use crate::model::{self, SceneBushing};
+use crate::profile;
+use crate::scene::{
+    BackboneSpec, Effect, Friction, Law, NumberType, ProfileSpec, Scene, TABLE_POINTS,
+};
+
+/// One line of the report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Check {
+    /// Effect name, as in the trace.
+    pub effect: String,
+    /// What is compared, with the reference's equation.
+    pub what: String,
+    /// Unit of the values.
+    pub unit: &'static str,
+    /// Reference and measured value, or why there is no reference.
+    pub outcome: Outcome,
+}
+
+/// A comparison, or its absence.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// Reference and measured values.
+    Compared {
+        /// Closed-form value.
+        reference: f64,
+        /// Value from the simulation.
+        measured: f64,
+    },
+    /// No closed-form reference, and why.
+    NoReference(String),
+}
+
+impl Check {
+    /// `measured / reference - 1`, if compared.
+    pub fn relative_error(&self) -> Option<f64> {
+        match self.outcome {
+            Outcome::Compared {
+                reference,
+                measured,
+            } => Some(if reference == 0.0 {
+                measured
+            } else {
+                measured / reference - 1.0
+            }),
+            Outcome::NoReference(_) => None,
+        }
+    }
+}
+
+impl fmt::Display for Check {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.outcome {
+            Outcome::Compared {
+                reference,
+                measured,
+            } => write!(
+                f,
+                "{}: {}: reference {reference:.6e} {u}, measured {measured:.6e} {u}, relative error {:+.2e}",
+                self.effect,
+                self.what,
+                self.relative_error().unwrap_or(f64::NAN),
+                u = self.unit
+            ),
+            Outcome::NoReference(why) => {
+                write!(f, "{}: no closed-form reference ({why})", self.effect)
+            }
+        }
+    }
+}
+
+/// What `validate` found.
+#[derive(Debug, Clone)]
+pub struct Report {
+    /// The profile and the window used.
+    pub context: String,
+    /// One entry per check.
+    pub checks: Vec<Check>,
+}
+
+impl fmt::Display for Report {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "{}", self.context)?;
+        for c in &self.checks {
+            writeln!(f, "{c}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Compares `scene` with its closed-form references. Errors only when the
+/// scene's model cannot be built; a missing reference is a line of the
+/// report.
+pub fn validate(scene: &Scene) -> Result<Report, String> {
+    match scene.number {
+        NumberType::F32 => validate_typed::<f32>(scene),
+        NumberType::F64 => validate_typed::<f64>(scene),
+    }
+}
+
+/// A periodic profile symmetric about its preload.
+#[derive(Debug, Clone, Copy)]
+struct Periodic {
+    /// Amplitude A, mm.
+    amplitude: f64,
+    /// Period, s.
+    period: f64,
+    /// Sine frequency in Hz, or the speed of a triangle in mm/s.
+    kind: Kind,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    Sine(f64),
+    Triangle(f64),
+}
+
+fn periodic(p: &ProfileSpec) -> Option<Periodic> {
+    if let ProfileSpec::Sine {
+        amplitude,
+        frequency_hz,
+        ..
+    } = p
+    {
+        return Some(Periodic {
+            amplitude: *amplitude,
+            period: 1.0 / *frequency_hz,
+            kind: Kind::Sine(*frequency_hz),
+        });
+    }
+    if let ProfileSpec::Triangle {
+        amplitude, speed, ..
+    } = p
+    {
+        return Some(Periodic {
+            amplitude: *amplitude,
+            period: 4.0 * *amplitude / *speed,
+            kind: Kind::Triangle(*speed),
+        });
+    }
+    None
+}
+
+/// Slope of a backbone that is linear everywhere.
+fn linear_stiffness(b: &BackboneSpec) -> Option<f64> {
+    if let BackboneSpec::Polynomial { coefficients, .. } = b
+        && coefficients.iter().skip(2).all(|c| *c == 0.0)
+    {
+        return coefficients.get(1).copied();
+    }
+    None
+}
+
+/// Most whole cycles in the least-squares window.
+const WINDOW_CYCLES: u64 = 5;
+
+/// Least-squares accumulators of `c + a cos ωt + b sin ωt`: the normal
+/// matrix, shared by every signal sampled at the same times, and one
+/// right-hand side per signal.
+struct Harmonic {
+    omega: f64,
+    m: [[f64; 3]; 3],
+    rhs: Vec<[f64; 3]>,
+}
+
+impl Harmonic {
+    fn new(omega: f64, signals: usize) -> Self {
+        Self {
+            omega,
+            m: [[0.0; 3]; 3],
+            rhs: vec![[0.0; 3]; signals],
+        }
+    }
+
+    /// One sample of every signal at time `t`.
+    fn push(&mut self, t: f64, values: impl Iterator<Item = f64>) {
+        let (s, c) = (self.omega * t).sin_cos();
+        let basis = [1.0, c, s];
+        for (row, bi) in self.m.iter_mut().zip(basis) {
+            for (cell, bj) in row.iter_mut().zip(basis) {
+                *cell += bi * bj;
+            }
+        }
+        for (r, y) in self.rhs.iter_mut().zip(values) {
+            for (ri, bi) in r.iter_mut().zip(basis) {
+                *ri += bi * y;
+            }
+        }
+    }
+
+    /// `(a, b)` of signal `k`.
+    fn fit(&self, k: usize) -> Option<(f64, f64)> {
+        let sol = solve3(self.m, *self.rhs.get(k)?)?;
+        Some((sol[1], sol[2]))
+    }
+}
+
+/// What the window gathered, streamed (no sample is stored).
+struct Window {
+    /// First harmonics of x (signal 0) and of `elastic + force` of each
+    /// effect (signal 1 + j), over the whole window.
+    harmonic: Harmonic,
+    /// Per effect over the last cycle: energy, smallest and largest force.
+    energy: Vec<f64>,
+    low: Vec<f64>,
+    high: Vec<f64>,
+}
+
+impl Window {
+    /// Half the peak-to-peak force of effect `j` over the last cycle.
+    fn swing(&self, j: usize) -> f64 {
+        match (self.low.get(j), self.high.get(j)) {
+            (Some(lo), Some(hi)) => 0.5 * (hi - lo),
+            _ => f64::NAN,
+        }
+    }
+}
+
+fn validate_typed<T: Real>(scene: &Scene) -> Result<Report, String> {
+    let bushing: SceneBushing<T> = model::build(scene).map_err(|e| e.to_string())?;
+    let names = model::effect_names(scene);
+    let none = |why: &str| Report {
+        context: format!("validate: {why}"),
+        checks: names
+            .iter()
+            .map(|n| Check {
+                effect: n.clone(),
+                what: String::new(),
+                unit: "",
+                outcome: Outcome::NoReference(why.to_string()),
+            })
+            .collect(),
+    };
+    let Some(p) = periodic(&scene.profile) else {
+        return Ok(none("the profile is not a periodic sine or triangle"));
+    };
+    let steps = scene.steps();
+    let spp = p.period / scene.dt;
+    let whole = (steps as f64 / spp + 1e-9).floor() as u64;
+    if whole < 2 || spp < 4.0 {
+        return Ok(none(
+            "fewer than 2 whole cycles or 4 steps per cycle: no steady cycle",
+        ));
+    }
+    let cycles = WINDOW_CYCLES.min(whole - 1);
+    let end = (whole as f64 * spp).round() as u64;
+    let start = ((whole - cycles) as f64 * spp).round() as u64;
+    let last = ((whole - 1) as f64 * spp).round() as u64;
+    let n = names.len();
+    let omega = match p.kind {
+        Kind::Sine(f) => TAU * f,
+        Kind::Triangle(_) => TAU / p.period,
+    };
+    let mut w = Window {
+        harmonic: Harmonic::new(omega, n + 1),
+        energy: vec![0.0; n],
+        low: vec![f64::INFINITY; n],
+        high: vec![f64::NEG_INFINITY; n],
+    };
+    let x0 = profile::displacement(&scene.profile, 0.0);
+    let mut state = bushing.state_at(T::from_f64(x0));
+    let mut forces = vec![f64::NAN; n];
+    for i in 1..=end {
+        let t = i as f64 * scene.dt;
+        let x = profile::displacement(&scene.profile, t);
+        let o = bushing.step(&mut state, T::from_f64(x));
+        if i <= start {
+            continue;
+        }
+        let elastic = o.elastic.to_f64();
+        let parts = o
+            .effects
+            .as_ref()
+            .map(|_| model::effect_outputs::<T>(&state))
+            .unwrap_or_default();
+        for (j, f) in forces.iter_mut().enumerate() {
+            let e = parts.get(j);
+            *f = e.map_or(f64::NAN, |e| e.force.to_f64());
+            if i > last {
+                let d = e.map_or(f64::NAN, |e| e.dissipated.to_f64());
+                if let (Some(en), Some(lo), Some(hi)) =
+                    (w.energy.get_mut(j), w.low.get_mut(j), w.high.get_mut(j))
+                {
+                    *en += d;
+                    *lo = lo.min(*f);
+                    *hi = hi.max(*f);
+                }
+            }
+        }
+        w.harmonic.push(
+            t,
+            std::iter::once(x).chain(forces.iter().map(|f| elastic + f)),
+        );
+    }
+    let t0 = start as f64 * scene.dt;
+    let kind = match p.kind {
+        Kind::Sine(f) => format!("sine of {} mm at {f} Hz", p.amplitude),
+        Kind::Triangle(v) => format!("triangle of {} mm at {v} mm/s", p.amplitude),
+    };
+    let context = format!(
+        "validate: {kind}, {} Hz, {}; steady window: cycles {} to {whole} (t = {t0:.6} s to {:.6} s); {} refused steps",
+        1.0 / scene.dt,
+        scene.number.name(),
+        whole - cycles + 1,
+        end as f64 * scene.dt,
+        state.rejected()
+    );
+    let k_lin = linear_stiffness(&scene.backbone);
+    let ctx = Ctx {
+        scene,
+        p,
+        k_lin,
+        g0: bushing.g0(),
+        t0,
+    };
+    let mut checks = Vec::new();
+    for (j, (effect, name)) in scene.effects.iter().zip(&names).enumerate() {
+        for (what, unit, outcome) in ctx.checks::<T>(effect, &w, j) {
+            checks.push(Check {
+                effect: name.clone(),
+                what,
+                unit,
+                outcome,
+            });
+        }
+    }
+    Ok(Report { context, checks })
+}
+
+struct Ctx<'a> {
+    scene: &'a Scene,
+    p: Periodic,
+    k_lin: Option<f64>,
+    g0: f64,
+    t0: f64,
+}
+
+type Line = (String, &'static str, Outcome);
+
+fn no(why: &str) -> Vec<Line> {
+    vec![(String::new(), "", Outcome::NoReference(why.into()))]
+}
+
+fn compared(what: impl Into<String>, unit: &'static str, reference: f64, measured: f64) -> Line {
+    (
+        what.into(),
+        unit,
+        Outcome::Compared {
+            reference,
+            measured,
+        },
+    )
+}
+
+impl Ctx<'_> {
+    fn checks<T: Real>(&self, effect: &Effect, w: &Window, j: usize) -> Vec<Line> {
+        let a = self.p.amplitude;
+        let swing = w.swing(j);
+        let per_cycle = w.energy.get(j).copied().unwrap_or(f64::NAN);
+        match effect {
+            Effect::Maxwell { form, cells, .. } => {
+                let (Kind::Sine(f), Some(k)) = (self.p.kind, self.k_lin) else {
+                    return no("the complex modulus needs a sine on a linear backbone");
+                };
+                self.maxwell::<T>(*form, cells, f, k, w, j, per_cycle)
+            }
+            Effect::Iwan {
+                slider,
+                k_ref,
+                cells,
+            } => {
+                let k = if *slider { Some(*k_ref) } else { self.k_lin };
+                let Some(k) = k else {
+                    return no("the clamp form's Masing loop needs a linear backbone");
+                };
+                let form = if *slider { "k_ref" } else { "backbone slope" };
+                let mut energy_ref = 0.0;
+                let mut tip = 0.0;
+                for c in cells {
+                    let x_f = c.slip_force / (c.g * k);
+                    energy_ref += 4.0 * c.slip_force * (a - x_f).max(0.0);
+                    tip += c.slip_force.min(c.g * k * a);
+                }
+                vec![
+                    compared(
+                        format!(
+                            "energy per steady cycle, Masing loops sum 4 F_f (A - x_f), x_f = F_f / (g k), k = {form} {k} N/mm"
+                        ),
+                        "mJ",
+                        energy_ref,
+                        per_cycle,
+                    ),
+                    compared(
+                        "half peak-to-peak force, sum min(F_f, g k A)",
+                        "N",
+                        tip,
+                        swing,
+                    ),
+                ]
+            }
+            Effect::TurningPoints { law, .. } => {
+                let h = |d: f64| branch(law, d);
+                let Some(h2a) = h(2.0 * a) else {
+                    return no("the law could not be built");
+                };
+                let integral = simpson(|d| h(d).unwrap_or(f64::NAN), 0.0, 2.0 * a, 20_000);
+                vec![
+                    compared("half peak-to-peak force, H(2A)/2", "N", 0.5 * h2a, swing),
+                    compared(
+                        "energy per steady cycle, Masing loop 2 int_0^2A H - 2A H(2A)",
+                        "mJ",
+                        2.0 * integral - 2.0 * a * h2a,
+                        per_cycle,
+                    ),
+                ]
+            }
+            Effect::Xf { cells, .. } => {
+                let Some(k) = self.k_lin else {
+                    return no("the x_f saturation g K x_f needs a linear backbone");
+                };
+                let speed = match self.p.kind {
+                    Kind::Triangle(v) => Some(v),
+                    Kind::Sine(_) => None,
+                };
+                if speed.is_none() && cells.iter().any(|c| c.omega > 0.0) {
+                    return no("x_f cells with omega > 0 relax at a varying rate under a sine");
+                }
+                let mut tip = 0.0;
+                let mut saturation = 0.0;
+                for c in cells {
+                    let lambda = speed.map_or(0.0, |v| c.omega / v) + 1.0 / c.x_f;
+                    saturation += c.g * k / lambda;
+                    tip += c.g * k / lambda * (lambda * a).tanh();
+                }
+                vec![compared(
+                    format!(
+                        "half peak-to-peak force; saturation sum g K x_f v/(v + omega x_f) = {saturation:.6e} N, loop tip sum g K tanh(lambda A)/lambda"
+                    ),
+                    "N",
+                    tip,
+                    swing,
+                )]
+            }
+            Effect::Friction(Friction::Dahl(d)) => vec![compared(
+                format!(
+                    "half peak-to-peak force; saturation f_f = {} N, loop tip of eq 1.43 over 2A",
+                    d.f_f
+                ),
+                "N",
+                dahl_tip(d.k_d, d.f_f, d.alpha, a),
+                swing,
+            )],
+            Effect::Friction(Friction::BoucWen(b)) => {
+                let ultimate = BoucWen::<f64>::new(b.alpha, b.a, b.beta, b.gamma, b.n)
+                    .map(|c| c.ultimate_force())
+                    .unwrap_or(f64::NAN);
+                vec![compared(
+                    format!(
+                        "half peak-to-peak force; ultimate force alpha w_u = {ultimate:.6e} N, loop tip of eq 1.44 over 2A"
+                    ),
+                    "N",
+                    bouc_wen_tip(b.alpha, b.a, b.beta, b.gamma, b.n, a),
+                    swing,
+                )]
+            }
+            Effect::Friction(Friction::Berg(b)) => {
+                let (x2, fm) = (b.x2, b.f_max);
+                let tip = (-(x2 + a) + ((x2 + a).powi(2) + 4.0 * x2 * a).sqrt()) / (2.0 * x2 / fm);
+                vec![compared(
+                    format!(
+                        "half peak-to-peak force; f_max = {fm} N, loop tip (x2/f_max) r^2 + (x2 + A) r = A f_max"
+                    ),
+                    "N",
+                    tip,
+                    swing,
+                )]
+            }
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn maxwell<T: Real>(
+        &self,
+        form: MaxwellForm,
+        cells: &[MaxwellSpec],
+        f: f64,
+        k: f64,
+        w: &Window,
+        j: usize,
+        per_cycle: f64,
+    ) -> Vec<Line> {
+        let omega = TAU * f;
+        let mut discrete = (0.0, 0.0);
+        let mut continuous = (0.0, 0.0);
+        for c in cells {
+            match MaxwellBank::<T, 1>::new(form, &[*c], self.scene.dt) {
+                Ok(bank) => {
+                    let (s, l) = bank.branch_response(omega);
+                    discrete.0 += s;
+                    discrete.1 += l;
+                }
+                Err(e) => return no(&format!("cell: {e}")),
+            }
+            let r = c.omega / omega;
+            continuous.0 += c.g / (1.0 + r * r);
+            continuous.1 += c.g * r / (1.0 + r * r);
+        }
+        let (Some(xp), Some(fp)) = (w.harmonic.fit(0), w.harmonic.fit(j + 1)) else {
+            return no("the least-squares fit is singular");
+        };
+        // K* = F / X, phasors a - i b of a cos + b sin.
+        let x2 = xp.0 * xp.0 + xp.1 * xp.1;
+        let storage = (fp.0 * xp.0 + fp.1 * xp.1) / x2;
+        let loss = (fp.0 * xp.1 - fp.1 * xp.0) / x2;
+        let slowest = cells.iter().map(|c| c.omega).fold(f64::INFINITY, f64::min);
+        let left = (-slowest * self.t0).exp();
+        let note = if left > 1e-4 {
+            format!("; transient of the slowest cell e^(-omega t) = {left:.1e} at the window")
+        } else {
+            String::new()
+        };
+        let g0 = self.g0;
+        let x_amp = x2.sqrt();
+        vec![
+            compared(
+                format!(
+                    "storage K' of g0 K x + bank force, first harmonic vs the discrete bank's exact response{note}"
+                ),
+                "N/mm",
+                k * (g0 + discrete.0),
+                storage,
+            ),
+            compared(
+                "loss K'' vs the discrete bank's exact response",
+                "N/mm",
+                k * discrete.1,
+                loss,
+            ),
+            compared(
+                "storage K' vs eq 1.8 (continuous)",
+                "N/mm",
+                k * (g0 + continuous.0),
+                storage,
+            ),
+            compared(
+                "loss K'' vs eq 1.8 (continuous)",
+                "N/mm",
+                k * continuous.1,
+                loss,
+            ),
+            compared(
+                "energy per steady cycle vs pi X^2 K'' (discrete bank)",
+                "mJ",
+                PI * x_amp * x_amp * k * discrete.1,
+                per_cycle,
+            ),
+        ]
+    }
+}
+
+/// Solves a 3×3 system by Cramer's rule (the normal equations of three
+/// well-separated functions: no pivoting needed); `None` if singular.
+fn solve3(m: [[f64; 3]; 3], r: [f64; 3]) -> Option<[f64; 3]> {
+    let det = |[a, b, c]: [[f64; 3]; 3]| {
+        a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+            + a[2] * (b[0] * c[1] - b[1] * c[0])
+    };
+    let d = det(m);
+    let scale = m.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+    if d.is_nan() || d.abs() <= 1e-12 * scale * scale * scale {
+        return None;
+    }
+    // Column j replaced by r.
+    let with = |j: usize| {
+        let mut c = m;
+        for (row, v) in c.iter_mut().zip(r) {
+            if let Some(x) = row.get_mut(j) {
+                *x = v;
+            }
+        }
+        det(c) / d
+    };
+    let x = [with(0), with(1), with(2)];
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// H(d) of a turning-point law, in f64.
+fn branch(law: &Law, d: f64) -> Option<f64> {
+    if let Law::Sts { c, k1 } = law {
+        return Sts::<f64>::new(*c, *k1).ok().map(|s| s.branch(d).0);
+    }
+    if let Law::Table { d: ds, k } = law {
+        return KfTable::<f64, TABLE_POINTS>::new(ds, k)
+            .ok()
+            .map(|t| t.branch(d).0);
+    }
+    None
+}
+
+/// Composite Simpson rule on `n` (even) intervals.
+fn simpson(f: impl Fn(f64) -> f64, a: f64, b: f64, n: usize) -> f64 {
+    let n = n.max(2) & !1;
+    let h = (b - a) / n as f64;
+    let inner: f64 = (1..n)
+        .map(|i| f(a + i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 })
+        .sum();
+    h / 3.0 * (f(a) + inner + f(b))
+}
+
+/// Root of a decreasing `g` on `[lo, hi]` by bisection.
+fn bisect(g: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if g(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi - lo <= 1e-15 * hi.abs() {
+            break;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Tip r of the steady symmetric loop of Dahl's law (eq 1.43) between
+/// ±A: the up stroke from -r travels 2A in u = 1 - F/f_f, exactly as the
+/// law integrates (`u^(1-α)` linear in travel, `u e^{k_d ξ / f_f}` at α = 1).
+fn dahl_tip(k_d: f64, f_f: f64, alpha: f64, a: f64) -> f64 {
+    let travel = k_d * 2.0 * a / f_f;
+    if alpha == 1.0 {
+        return f_f * (0.5 * travel).tanh();
+    }
+    let end = |r: f64| {
+        let u0 = 1.0 + r / f_f;
+        let p = u0.powf(1.0 - alpha) - (1.0 - alpha) * travel;
+        let u1 = if p <= 0.0 {
+            0.0
+        } else {
+            p.powf(1.0 / (1.0 - alpha))
+        };
+        f_f * (1.0 - u1)
+    };
+    bisect(|r| end(r) - r, 0.0, f_f)
+}
+
+/// Tip of the steady symmetric loop of the Bouc-Wen law (eq 1.44): w = F/α
+/// goes from -r to r over a travel 2A with `dw/dξ = A_bw - (γ + β sgn w)
+/// |w|^n`. The travel is integrated by Simpson's rule, on `w = w_u (1 -
+/// e^{-s})` above 0 where the rate vanishes at w_u.
+fn bouc_wen_tip(alpha: f64, a_bw: f64, beta: f64, gamma: f64, n: f64, a: f64) -> f64 {
+    let w_u = (a_bw / (beta + gamma)).powf(1.0 / n);
+    let below = |r: f64| {
+        simpson(
+            |w: f64| 1.0 / (a_bw + (beta - gamma) * w.abs().powf(n)),
+            -r,
+            0.0,
+            2000,
+        )
+    };
+    // Above 0 in s: dw = w_u e^{-s} ds, A - (β+γ) w^n = A (1 - (1 - e^{-s})^n).
+    let above = |s_end: f64| {
+        simpson(
+            |s: f64| {
+                let e = (-s).exp();
+                let gap = -(n * (-e).ln_1p()).exp_m1();
+                if gap > 0.0 {
+                    w_u * e / (a_bw * gap)
+                } else {
+                    w_u / (a_bw * n)
+                }
+            },
+            0.0,
+            s_end,
+            4000,
+        )
+    };
+    let r_of = |s: f64| w_u * -(-s).exp_m1();
+    let travel = |s: f64| below(r_of(s)) + above(s);
+    const S_MAX: f64 = 40.0;
+    let s = if travel(S_MAX) < 2.0 * a {
+        S_MAX
+    } else {
+        bisect(|s| 2.0 * a - travel(s), 0.0, S_MAX)
+    };
+    alpha * r_of(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn first_harmonic_fits_offset_and_phase() {
+        let w = TAU * 3.0;
+        let mut h = Harmonic::new(w, 2);
+        // 1.1 periods: not a whole number, the fit is still exact.
+        for i in 0..367 {
+            let t = i as f64 * 1e-3;
+            let v = 2.0 + 0.7 * (w * t).cos() - 1.3 * (w * t).sin();
+            h.push(t, [v, -v].into_iter());
+        }
+        let (a, b) = h.fit(0).unwrap();
+        assert!(
+            (a - 0.7).abs() < 1e-12 && (b + 1.3).abs() < 1e-12,
+            "{a} {b}"
+        );
+        let (a, b) = h.fit(1).unwrap();
+        assert!((a + 0.7).abs() < 1e-12 && (b - 1.3).abs() < 1e-12);
+        assert!(h.fit(2).is_none());
+    }
+
+    #[test]
+    fn loop_tips_of_the_friction_laws() {
+        // Dahl α = 1 against its closed form; α = 1 through the general
+        // branch (α slightly off) agrees.
+        let t1 = dahl_tip(200.0, 10.0, 1.0, 0.03);
+        assert!((t1 - 10.0 * (0.6f64).tanh()).abs() < 1e-12);
+        let near = dahl_tip(200.0, 10.0, 1.0 + 1e-7, 0.03);
+        assert!((near / t1 - 1.0).abs() < 1e-5, "{near} {t1}");
+        // α < 1 saturates in a finite travel.
+        assert!((dahl_tip(200.0, 10.0, 0.5, 1.0) / 10.0 - 1.0).abs() < 1e-12);
+        // Bouc-Wen with n = 1, β + γ = β - γ... (γ = 0) is Dahl α = 1 in w:
+        // dw/dξ = A - β |w| on both sides, tip w_u tanh(β A_amp).
+        let tip = bouc_wen_tip(20.0, 10.0, 60.0, 0.0, 1.0, 0.01);
+        let w_u = 10.0 / 60.0;
+        let expect = 20.0 * w_u * (60.0f64 * 0.01).tanh();
+        assert!((tip / expect - 1.0).abs() < 1e-6, "{tip} {expect}");
+        // Far into saturation: the ultimate force.
+        let u = bouc_wen_tip(20.0, 10.0, 60.0, 20.0, 8.0, 1.0);
+        assert!((u / (20.0 * (0.125f64).powf(0.125)) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn solve3_and_simpson() {
+        let x = solve3(
+            [[2.0, 1.0, 0.0], [1.0, 3.0, 1.0], [0.0, 1.0, 4.0]],
+            [3.0, 5.0, 5.0],
+        )
+        .unwrap();
+        assert!(x.iter().all(|v| (v - 1.0).abs() < 1e-12), "{x:?}");
+        assert!(solve3([[1.0; 3]; 3], [1.0; 3]).is_none());
+        assert!((simpson(|x| x * x, 0.0, 3.0, 10) - 9.0).abs() < 1e-12);
+    }
+}
