@@ -178,3 +178,40 @@ fn committed_xf_table_is_current() {
         "docs/xf-saturation.md is stale: run `cargo run --release -p bushing-sim -- xf-table --out docs/xf-saturation.md`"
     );
 }
+
+/// Every scene in `scenes/` loads and runs as the README runs it (`run
+/// SCENE --out DIR`), refuses no step, and every plot it writes is
+/// well-formed SVG whose axes carry a unit in brackets.
+#[test]
+fn every_scene_in_scenes_runs_and_plots() {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(root().join("scenes"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 10, "{} scenes", files.len());
+    for file in files {
+        let scene = Scene::load(&file).unwrap_or_else(|e| panic!("{e}"));
+        let name = file.file_stem().unwrap().to_string_lossy().to_string();
+        let out = std::env::temp_dir().join(format!("bushing-all-{}-{name}", std::process::id()));
+        let summary = run::run(&scene, &out).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(summary.refused, 0, "{name}");
+        assert!(summary.steps > 0, "{name}");
+        let mut plots = 0;
+        for entry in std::fs::read_dir(&out).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "svg") {
+                let svg = std::fs::read_to_string(&path).unwrap();
+                if let Err(e) = bushing_sim::svg::well_formed(&svg) {
+                    panic!("{name}: {} is not well-formed: {e}", path.display());
+                }
+                let labelled = svg.matches(" [").count();
+                assert!(labelled >= 2, "{name}: {} lacks axis units", path.display());
+                plots += 1;
+            }
+        }
+        assert!(plots >= 3, "{name}: {plots} plots");
+        std::fs::remove_dir_all(out).ok();
+    }
+}
