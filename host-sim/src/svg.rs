@@ -89,8 +89,15 @@ pub fn ticks(lo: f64, hi: f64, target: usize) -> Vec<f64> {
         .map(|m| m * mag)
         .find(|s| *s >= raw)
         .unwrap_or(10.0 * mag);
-    let first = (lo / step).ceil() as i64;
-    let last = (hi / step).floor() as i64;
+    let (first, last) = ((lo / step).ceil(), (hi / step).floor());
+    // A range too narrow for its magnitude (subnormal forces, say) leaves
+    // no usable step: label its ends only.
+    if !(step > 0.0 && step.is_normal() && first.is_finite() && last.is_finite())
+        || last - first > 1000.0
+    {
+        return vec![lo, hi];
+    }
+    let (first, last) = (first as i64, last as i64);
     (first..=last).map(|k| k as f64 * step).collect()
 }
 
@@ -519,6 +526,14 @@ fn check_text(text: &str, at: usize) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ticks_of_a_subnormal_range_are_its_ends() {
+        assert_eq!(ticks(-3e-322, 3e-322, 5), vec![-3e-322, 3e-322]);
+        let t = ticks(0.0, 1.0, 5);
+        assert_eq!((t.len(), t[0], t[5]), (6, 0.0, 1.0));
+        assert!((t[3] - 0.6).abs() < 1e-15);
+    }
 
     #[test]
     fn ticks_are_nice_and_cover_the_range() {
