@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # The project's test command. On a machine that has only Rust it installs
-# what is missing (Cortex-M targets, clippy/rustfmt, QEMU), then runs:
+# what is missing (Cortex-M targets, clippy/rustfmt, QEMU, valgrind), then
+# runs:
 #   1. formatting and lints (host, and the Cortex-M crates for the target);
 #   2. core-nostd builds for Cortex-M4F (thumbv7em-none-eabihf) and
 #      Cortex-M3 without FPU (thumbv7m-none-eabi);
 #   3. the Cortex-M suite under QEMU: M4F debug and release, M3 release;
 #      QEMU's exit code is the verdict, a hang is killed by `timeout`;
 #   4. the step-cost firmware under QEMU (guest instructions per step);
-#   5. the host tests (unit, integration, doc).
+#   5. the host tests (unit, integration, doc);
+#   6. a scene's cost against its parts in host instructions (callgrind),
+#      printed, never asserted.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -30,12 +33,16 @@ for component in clippy rustfmt; do
     grep -q "^$component" <<<"$installed_components" || rustup component add "$component"
 done
 
-if ! command -v qemu-system-arm >/dev/null 2>&1; then
-    step "installing qemu-system-arm"
+missing=()
+command -v qemu-system-arm >/dev/null 2>&1 || missing+=(qemu-system-arm)
+command -v valgrind >/dev/null 2>&1 || missing+=(valgrind)
+if [ ${#missing[@]} -gt 0 ]; then
+    step "installing ${missing[*]}"
     as_root apt-get update -qq
-    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq qemu-system-arm >/dev/null
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 qemu-system-arm --version | head -n 1
+valgrind --version
 
 step "format"
 cargo fmt --all -- --check
@@ -65,3 +72,6 @@ cargo run -p bushing-boards --release --target thumbv7em-none-eabihf --bin step-
 
 step "host tests"
 cargo test
+
+step "scene cost against the sum of its parts (host instructions, callgrind)"
+cargo run -q -p bushing-sim --release -- cost --instructions scenes/maxwell4.toml

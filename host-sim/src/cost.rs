@@ -5,41 +5,40 @@
 //! control loop reads (force, tangent and dissipated energy). Each part is
 //! timed the same way on its own:
 //!
-//! - the backbone alone: a bushing of the scene's backbone and no effect
-//!   (the type `()`, no run-time slot);
-//! - each effect: a bushing of the backbone and that effect only, as the
-//!   scene builds it, minus the backbone alone, so that the effect sees
-//!   exactly the drive it sees in the scene;
-//! - for a Maxwell effect of at most 8 cells, also the const-size
-//!   [`MaxwellBank`] the firmware would use, for comparison.
+//! - the backbone alone: the scene compiled without its effects
+//!   (`Bushing<_, _, ()>`);
+//! - each effect: the scene compiled with that effect only
+//!   (`Bushing<_, _, (E,)>`), minus the backbone alone, so that the effect
+//!   sees exactly the drive it sees in the scene;
+//! - for comparison (not in the sum): a scene of one effect also as the
+//!   general effect list of `model::build`, and a Maxwell effect of at
+//!   most 8 cells as the const-size [`MaxwellBank`] firmware would use.
 //!
 //! Profiles shorter than [`CostOptions::min_steps`] are repeated to that
 //! length; each figure is the best of [`CostOptions::repetitions`]
 //! interleaved passes.
 //!
-//! **Where a run-time composed scene loses time.** The scene's bushing is
-//! one type for every scene (`model::SceneBushing`): the effects the scene
-//! lists, in a list, each behind a match on its kind; an absent effect has
-//! no slot and costs nothing. Each step walks the list and dispatches, and
-//! on a small scene that is a visible share of the step: `cost
-//! scenes/maxwell4.toml` measured the scene 1.26 to 1.28 times the sum of
-//! its parts (the earlier design, nine optional slots tested every step,
-//! measured 1.25 to 1.31). Separately, the run-time sized banks
-//! (`model::DynMaxwell`) loop over a slice of unknown length behind a match
-//! on the state storage, which the compiler neither unrolls nor inlines;
-//! the const-size line shows what the firmware pays for the same cells
-//! (about half).
+//! **How a scene is held.** `model::compile` picks the shape once, at
+//! build time: a scene of one effect runs as that effect's own bushing
+//! type, its loop monomorphised, so it costs what its parts cost; two or
+//! more effects run as a list, one match per effect and step. The drivers
+//! (`run`, `validate`, `cost`) dispatch once per chunk of steps, never per
+//! step. The run-time sized banks (`model::DynMaxwell`) loop over a slice
+//! of unknown length, which the compiler does not unroll; the const-size
+//! line shows what firmware pays for the same cells (about half).
 
 use std::fmt;
 use std::hint::black_box;
-use std::time::Instant;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Duration;
 
 use bushing::{
     Accumulator, Backbone, Bushing, Compensated, Effect, MaxwellBank, MaxwellForm, MaxwellSpec,
     Plain, Real,
 };
 
-use crate::model::{self, AnyBackbone, AnyEffect, SceneBushing, SceneEffects};
+use crate::model::{self, AnyBackbone, SceneBushing, Shape};
 use crate::profile;
 use crate::scene::{BackboneSpec, Effect as EffectDesc, NumberType, Scene};
 
@@ -65,18 +64,41 @@ impl Default for CostOptions {
     }
 }
 
-/// One timed part.
+/// What a figure counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Measure {
+    /// Host wall clock, best of several passes: ns per step.
+    WallClock,
+    /// Host instructions counted by valgrind's callgrind in the stepping
+    /// function only: instructions per step, the same on every run of the
+    /// same binary.
+    Instructions,
+}
+
+impl Measure {
+    /// Unit of the figures.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Self::WallClock => "ns/step",
+            Self::Instructions => "instr/step",
+        }
+    }
+}
+
+/// One measured part.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Part {
     /// What it is.
     pub name: String,
-    /// Best ns per step.
+    /// Cost per step, in the report's [`Measure`].
     pub ns_per_step: f64,
 }
 
 /// What `cost` measured.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CostReport {
+    /// What the figures count.
+    pub measure: Measure,
     /// Working type.
     pub number: NumberType,
     /// Steps per timed pass.
@@ -87,8 +109,12 @@ pub struct CostReport {
     pub parts: Vec<Part>,
     /// The whole scene.
     pub scene_ns: f64,
-    /// Const-size banks for comparison (not in the sum).
-    pub firmware: Vec<Part>,
+    /// How the scene's effects are held ([`model::SceneModel::shape`]).
+    pub shape: Shape,
+    /// Other ways to hold the same effects, for comparison (not in the
+    /// sum): the whole scene as an effect list, and const-size Maxwell
+    /// banks (effect only, the backbone subtracted).
+    pub comparisons: Vec<Part>,
 }
 
 impl CostReport {
@@ -104,25 +130,30 @@ impl CostReport {
 
 impl fmt::Display for CostReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(
-            f,
-            "cost per step, {}, {} steps per pass, best of {} passes (host wall clock, stepping only)",
-            self.number.name(),
-            self.steps,
-            self.repetitions
-        )?;
-        for p in &self.parts {
-            writeln!(f, "part  {:<48} {:>9.2} ns/step", p.name, p.ns_per_step)?;
-        }
-        writeln!(f, "sum of parts {:<41} {:>9.2} ns/step", "", self.sum())?;
-        writeln!(f, "scene {:<48} {:>9.2} ns/step", "", self.scene_ns)?;
-        writeln!(f, "ratio scene / sum of parts {:>36.3}", self.ratio())?;
-        for p in &self.firmware {
-            writeln!(
+        let number = self.number.name();
+        match self.measure {
+            Measure::WallClock => writeln!(
                 f,
-                "for comparison, {:<38} {:>9.2} ns/step",
-                p.name, p.ns_per_step
-            )?;
+                "cost per step, {number}, {} steps per pass, best of {} passes (host wall clock, stepping only)",
+                self.steps, self.repetitions
+            )?,
+            Measure::Instructions => writeln!(
+                f,
+                "cost per step, {number}, {} steps (host instructions counted by callgrind, stepping only)",
+                self.steps
+            )?,
+        }
+        let unit = self.measure.unit();
+        for p in &self.parts {
+            writeln!(f, "part  {:<48} {:>9.2} {unit}", p.name, p.ns_per_step)?;
+        }
+        writeln!(f, "sum of parts {:<41} {:>9.2} {unit}", "", self.sum())?;
+        let scene = format!("scene ({})", self.shape.name());
+        writeln!(f, "{scene:<54} {:>9.2} {unit}", self.scene_ns)?;
+        writeln!(f, "ratio scene / sum of parts {:>36.3}", self.ratio())?;
+        for p in &self.comparisons {
+            writeln!(f, "for comparison: {}", p.name)?;
+            writeln!(f, "{:<54} {:>9.2} {unit}", "", p.ns_per_step)?;
         }
         Ok(())
     }
@@ -141,15 +172,84 @@ pub fn cost_with(scene: &Scene, options: CostOptions) -> Result<CostReport, Stri
     }
 }
 
-/// One timed pass: ns per step of `b` over `inputs`, from rest at `x0`.
-fn pass<T: Real, B: Backbone<T>, E: Effect<T>>(b: &Bushing<T, B, E>, inputs: &[T], x0: T) -> f64 {
-    let mut state = b.state_at(x0);
-    let start = Instant::now();
-    for &x in inputs {
-        let o = b.step(&mut state, x);
-        black_box((o.force, o.tangent, o.dissipated));
+/// Measures `scene` and its parts by host instructions: each part is
+/// stepped `steps` times in a child process (this program's hidden
+/// `cost-part` command, reading `scene_file`) under valgrind's callgrind,
+/// counting only the stepping function. Needs `valgrind` on the path.
+pub fn cost_instructions(
+    scene_file: &Path,
+    scene: &Scene,
+    steps: usize,
+) -> Result<CostReport, String> {
+    let exe = std::env::current_exe().map_err(|e| format!("cannot find this program: {e}"))?;
+    let dir = std::env::temp_dir().join(format!("bushing-cost-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let plan = match scene.number {
+        NumberType::F32 => plan::<f32>(scene)?.layout,
+        NumberType::F64 => plan::<f64>(scene)?.layout,
+    };
+    let mut counts = Vec::with_capacity(plan.len);
+    for part in 0..plan.len {
+        let out = dir.join(format!("part-{part}.out"));
+        let status = Command::new("valgrind")
+            .arg("--tool=callgrind")
+            .arg(format!("--callgrind-out-file={}", out.display()))
+            .arg(format!("--toggle-collect=*{STEPPING}*"))
+            .arg(&exe)
+            .args(["cost-part", &scene_file.display().to_string()])
+            .args([part.to_string(), steps.to_string()])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .map_err(|e| format!("cannot start valgrind (is it installed?): {e}"))?;
+        if !status.success() {
+            return Err(format!("valgrind on part {part} failed: {status}"));
+        }
+        let text = std::fs::read_to_string(&out).map_err(|e| format!("{}: {e}", out.display()))?;
+        let total = text
+            .lines()
+            .find_map(|l| {
+                l.strip_prefix("totals:")
+                    .or_else(|| l.strip_prefix("summary:"))
+            })
+            .and_then(|v| v.split_whitespace().next()?.parse::<u64>().ok())
+            .ok_or_else(|| format!("{}: no instruction total", out.display()))?;
+        if total == 0 {
+            return Err(format!("part {part}: no instruction counted in {STEPPING}"));
+        }
+        counts.push(total as f64 / steps.max(1) as f64);
     }
-    start.elapsed().as_secs_f64() * 1e9 / inputs.len().max(1) as f64
+    std::fs::remove_dir_all(&dir).ok();
+    Ok(plan.report(scene, Measure::Instructions, steps, 1, &counts))
+}
+
+/// The hidden `cost-part` command: steps part `part` of `scene`'s plan
+/// over `steps` steps of its profile (the child process of
+/// [`cost_instructions`]).
+pub fn run_part(scene: &Scene, part: usize, steps: usize) -> Result<(), String> {
+    fn go<T: Real + 'static>(scene: &Scene, part: usize, steps: usize) -> Result<(), String> {
+        let plan = plan::<T>(scene)?;
+        let (inputs, x0) = inputs::<T>(scene, steps, steps);
+        let timer = plan
+            .timers
+            .get(part)
+            .ok_or_else(|| format!("no part {part} (the scene has {})", plan.layout.len))?;
+        black_box(timer(&inputs, x0));
+        Ok(())
+    }
+    match scene.number {
+        NumberType::F32 => go::<f32>(scene, part, steps),
+        NumberType::F64 => go::<f64>(scene, part, steps),
+    }
+}
+
+/// Name of the function that steps every part (for callgrind's
+/// `--toggle-collect`): [`model::stepping_pass`].
+const STEPPING: &str = "stepping_pass";
+
+/// Nanoseconds per input.
+fn per_step<T>(elapsed: Duration, inputs: &[T]) -> f64 {
+    elapsed.as_secs_f64() * 1e9 / inputs.len().max(1) as f64
 }
 
 type Timer<T> = Box<dyn Fn(&[T], T) -> f64>;
@@ -157,35 +257,19 @@ type Timer<T> = Box<dyn Fn(&[T], T) -> f64>;
 fn timer<T: Real + 'static, B: Backbone<T> + 'static, E: Effect<T> + 'static>(
     b: Bushing<T, B, E>,
 ) -> Timer<T> {
-    Box::new(move |inputs, x0| pass(&b, inputs, x0))
+    Box::new(move |inputs, x0| per_step(model::stepping_pass(&b, inputs, x0), inputs))
 }
 
-/// A bushing of `backbone` and the first effect of `effects`, as its own
-/// concrete type (no list around it).
-fn alone<T: Real + 'static>(
-    backbone: &AnyBackbone<T>,
-    effects: &SceneEffects<T>,
-) -> Result<Timer<T>, String> {
-    fn one<T: Real + 'static, E: Effect<T> + Clone + 'static>(
-        backbone: &AnyBackbone<T>,
-        e: &E,
-    ) -> Result<Timer<T>, String> {
-        Bushing::new(backbone.clone(), (e.clone(),))
-            .map(timer)
-            .map_err(|e| e.to_string())
-    }
-    match effects.effects().first() {
-        Some(AnyEffect::Maxwell(e)) => one(backbone, e),
-        Some(AnyEffect::Clamp(e)) => one(backbone, e),
-        Some(AnyEffect::Sliders(e)) => one(backbone, e),
-        Some(AnyEffect::Xf(e)) => one(backbone, e),
-        Some(AnyEffect::Sts(e)) => one(backbone, e),
-        Some(AnyEffect::Table(e)) => one(backbone, e),
-        Some(AnyEffect::Dahl(e)) => one(backbone, e),
-        Some(AnyEffect::BoucWen(e)) => one(backbone, e),
-        Some(AnyEffect::Berg(e)) => one(backbone, e),
-        None => Err("no effect to time".into()),
-    }
+/// The scene `scene` with `effects` only, compiled as `run` compiles it.
+fn compiled<T: Real + 'static>(scene: &Scene, effects: &[EffectDesc]) -> Result<Timer<T>, String> {
+    let sub = Scene {
+        effects: effects.to_vec(),
+        ..scene.clone()
+    };
+    let model = model::compile::<T>(&sub).map_err(|e| e.to_string())?;
+    Ok(Box::new(move |inputs, x0| {
+        per_step(model.time_steps(inputs, x0), inputs)
+    }))
 }
 
 /// The const-size Maxwell bank of `cells` (1 to 8), as firmware builds it.
@@ -228,40 +312,59 @@ fn firmware_maxwell<T: Real + 'static>(
     }
 }
 
-fn cost_typed<T: Real + 'static>(
-    scene: &Scene,
-    options: CostOptions,
-) -> Result<CostReport, String> {
-    let built: SceneBushing<T> = model::build(scene).map_err(|e| e.to_string())?;
-    let backbone = model::backbone::<T>(&scene.backbone).map_err(|e| e.to_string())?;
-    let names = model::effect_names(scene);
-
-    // The profile, repeated to at least min_steps.
-    let steps = (scene.steps() as usize).clamp(1, options.max_steps.max(1));
+/// The profile's inputs, `min_steps` to `max_steps` of them (a short
+/// profile repeated), and the start displacement.
+fn inputs<T: Real>(scene: &Scene, min_steps: usize, max_steps: usize) -> (Vec<T>, T) {
+    let steps = (scene.steps() as usize).clamp(1, max_steps.max(1));
     let profile: Vec<T> = (1..=steps)
         .map(|i| T::from_f64(profile::displacement(&scene.profile, i as f64 * scene.dt)))
         .collect();
-    let inputs: Vec<T> = profile
+    let inputs = profile
         .iter()
         .copied()
         .cycle()
-        .take(steps.max(options.min_steps))
+        .take(steps.max(min_steps))
         .collect();
-    let x0 = T::from_f64(profile::displacement(&scene.profile, 0.0));
+    (
+        inputs,
+        T::from_f64(profile::displacement(&scene.profile, 0.0)),
+    )
+}
 
-    let mut timers: Vec<Timer<T>> = vec![
-        timer(built),
-        timer(Bushing::new(backbone.clone(), ()).map_err(|e| e.to_string())?),
-    ];
+/// What is measured, in order: the scene, the backbone alone, each effect
+/// alone, then the comparisons.
+struct Layout {
+    len: usize,
+    backbone: String,
+    effects: Vec<String>,
+    shape: Shape,
+    /// (name, whether the backbone alone is subtracted)
+    comparisons: Vec<(String, bool)>,
+}
+
+struct Plan<T> {
+    timers: Vec<Timer<T>>,
+    layout: Layout,
+}
+
+fn plan<T: Real + 'static>(scene: &Scene) -> Result<Plan<T>, String> {
+    let shape = model::compile::<T>(scene)
+        .map_err(|e| e.to_string())?
+        .shape();
+    let backbone = model::backbone::<T>(&scene.backbone).map_err(|e| e.to_string())?;
+    let mut timers: Vec<Timer<T>> = vec![compiled(scene, &scene.effects)?, compiled(scene, &[])?];
     for effect in &scene.effects {
-        let sub = Scene {
-            effects: vec![effect.clone()],
-            ..scene.clone()
-        };
-        let b: SceneBushing<T> = model::build(&sub).map_err(|e| e.to_string())?;
-        timers.push(alone(&backbone, b.effects())?);
+        timers.push(compiled(scene, std::slice::from_ref(effect))?);
     }
-    let mut firmware_names = Vec::new();
+    let mut comparisons = Vec::new();
+    if shape != Shape::List {
+        let list: SceneBushing<T> = model::build(scene).map_err(|e| e.to_string())?;
+        comparisons.push((
+            "the whole scene as an effect list (model::build)".to_string(),
+            false,
+        ));
+        timers.push(timer(list));
+    }
     for effect in &scene.effects {
         if let EffectDesc::Maxwell {
             form,
@@ -270,54 +373,98 @@ fn cost_typed<T: Real + 'static>(
         } = effect
             && let Some(t) = firmware_maxwell(&backbone, *form, cells, scene.dt, *compensated)
         {
-            firmware_names.push(format!(
-                "MaxwellBank<{}, {}{}> (const size)",
-                scene.number.name(),
-                cells.len(),
-                if *compensated { ", Compensated" } else { "" }
+            comparisons.push((
+                format!(
+                    "{} as a const-size MaxwellBank<{}, {}{}>, effect only",
+                    EffectDesc::name(effect),
+                    scene.number.name(),
+                    cells.len(),
+                    if *compensated { ", Compensated" } else { "" }
+                ),
+                true,
             ));
             timers.push(t);
         }
     }
-
-    let mut best = vec![f64::INFINITY; timers.len()];
-    for _ in 0..options.repetitions.max(1) {
-        for (b, t) in best.iter_mut().zip(&timers) {
-            *b = b.min(t(&inputs, x0));
-        }
-    }
-    let get = |i: usize| best.get(i).copied().unwrap_or(f64::NAN);
-    let scene_ns = get(0);
-    let backbone_ns = get(1);
     let kind = if let BackboneSpec::Spline { .. } = scene.backbone {
         "spline"
     } else {
         "polynomial"
     };
-    let mut parts = vec![Part {
-        name: format!("backbone alone ({kind})"),
-        ns_per_step: backbone_ns,
-    }];
-    for (j, name) in names.iter().enumerate() {
-        parts.push(Part {
-            name: name.clone(),
-            ns_per_step: get(2 + j) - backbone_ns,
-        });
-    }
-    let firmware = firmware_names
-        .into_iter()
-        .enumerate()
-        .map(|(j, name)| Part {
-            name,
-            ns_per_step: get(2 + names.len() + j) - backbone_ns,
-        })
-        .collect();
-    Ok(CostReport {
-        number: scene.number,
-        steps: inputs.len(),
-        repetitions: options.repetitions.max(1),
-        parts,
-        scene_ns,
-        firmware,
+    Ok(Plan {
+        layout: Layout {
+            len: timers.len(),
+            backbone: format!("backbone alone ({kind})"),
+            effects: model::effect_names(scene),
+            shape,
+            comparisons,
+        },
+        timers,
     })
+}
+
+impl Layout {
+    /// The report from one figure per measured item, in plan order.
+    fn report(
+        self,
+        scene: &Scene,
+        measure: Measure,
+        steps: usize,
+        repetitions: usize,
+        figures: &[f64],
+    ) -> CostReport {
+        let get = |i: usize| figures.get(i).copied().unwrap_or(f64::NAN);
+        let backbone = get(1);
+        let n = self.effects.len();
+        let mut parts = vec![Part {
+            name: self.backbone,
+            ns_per_step: backbone,
+        }];
+        for (j, name) in self.effects.into_iter().enumerate() {
+            parts.push(Part {
+                name,
+                ns_per_step: get(2 + j) - backbone,
+            });
+        }
+        let comparisons = self
+            .comparisons
+            .into_iter()
+            .enumerate()
+            .map(|(j, (name, effect_only))| Part {
+                name,
+                ns_per_step: get(2 + n + j) - if effect_only { backbone } else { 0.0 },
+            })
+            .collect();
+        CostReport {
+            measure,
+            number: scene.number,
+            steps,
+            repetitions,
+            parts,
+            scene_ns: get(0),
+            shape: self.shape,
+            comparisons,
+        }
+    }
+}
+
+fn cost_typed<T: Real + 'static>(
+    scene: &Scene,
+    options: CostOptions,
+) -> Result<CostReport, String> {
+    let plan = plan::<T>(scene)?;
+    let (inputs, x0) = inputs::<T>(scene, options.min_steps, options.max_steps);
+    let mut best = vec![f64::INFINITY; plan.timers.len()];
+    for _ in 0..options.repetitions.max(1) {
+        for (b, t) in best.iter_mut().zip(&plan.timers) {
+            *b = b.min(t(&inputs, x0));
+        }
+    }
+    Ok(plan.layout.report(
+        scene,
+        Measure::WallClock,
+        inputs.len(),
+        options.repetitions.max(1),
+        &best,
+    ))
 }

@@ -10,11 +10,15 @@ usage:
   bushing-sim run SCENE.toml --out DIR     simulate a scene: DIR/trace.csv, DIR/modulus.csv, DIR/*.svg
   bushing-sim validate SCENE.toml          compare a scene with its closed-form references
   bushing-sim cost SCENE.toml              ns per step of the scene against the sum of its parts
+  bushing-sim cost --instructions SCENE.toml   the same in host instructions (valgrind's callgrind)
   bushing-sim maxwell-table [--out FILE]   complex-modulus error of every Maxwell form
   bushing-sim xf-table [--out FILE]        saturation of the x_f cell forms against the step
   bushing-sim iwan-table [--out FILE]      Iwan discretisations of the STS and Segalman laws
   bushing-sim fractional-table [--out FILE]  Grünwald accuracy, Maxwell fits and their cost
   bushing-sim help";
+
+/// Steps per part for `cost --instructions`.
+const INSTRUCTION_STEPS: usize = 200_000;
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -61,6 +65,17 @@ fn dispatch(args: &[String]) -> Result<(), String> {
             let scene = load(scene)?;
             print!("{}", cost::cost(&scene)?);
             Ok(())
+        }
+        ["cost", "--instructions", file] | ["cost", file, "--instructions"] => {
+            let scene = load(file)?;
+            let report = cost::cost_instructions(&PathBuf::from(file), &scene, INSTRUCTION_STEPS)?;
+            print!("{report}");
+            Ok(())
+        }
+        ["cost-part", file, part, steps] => {
+            let scene = load(file)?;
+            let number = |s: &str| s.parse::<usize>().map_err(|e| format!("{s}: {e}"));
+            cost::run_part(&scene, number(part)?, number(steps)?)
         }
         [name] | [name, "--out", _] if report(name).is_some() => {
             let text = report(name).map(|f| f()).unwrap_or_default();

@@ -460,3 +460,205 @@ pub fn effect_names(scene: &Scene) -> Vec<String> {
 pub fn effect_outputs<T: Real>(state: &SceneState<T>) -> Vec<EffectOutput<T>> {
     state.effects().iter().map(|slot| slot.last).collect()
 }
+
+/// What the drivers read from one step of a [`SceneModel`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepRow<T> {
+    /// Total force F_n.
+    pub force: T,
+    /// Algorithmic tangent dF_n/dx_n.
+    pub tangent: T,
+    /// Energy dissipated in the step, all effects.
+    pub dissipated: T,
+    /// Long-term elastic branch g^0 F^∞(x_n).
+    pub elastic: T,
+    /// The step was refused (non-finite or out-of-range input): the state
+    /// was kept and the effects' outputs of this row are zero.
+    pub refused: bool,
+}
+
+/// Effects whose per-effect outputs a driver can read after a step.
+pub trait Parts<T: Real>: Effect<T> {
+    /// Appends each effect's output of the step that gave `report` (and
+    /// left `state`), in the scene's order.
+    fn parts(state: &Self::State, report: &Self::Report, out: &mut Vec<EffectOutput<T>>);
+}
+
+impl<T: Real> Parts<T> for () {
+    fn parts(_: &(), _: &(), _: &mut Vec<EffectOutput<T>>) {}
+}
+
+impl<T: Real, E: Effect<T>> Parts<T> for (E,) {
+    #[inline(always)]
+    fn parts(_: &Self::State, report: &Self::Report, out: &mut Vec<EffectOutput<T>>) {
+        out.push(E::total(&report.0));
+    }
+}
+
+impl<T: Real> Parts<T> for EffectList<T> {
+    #[inline(always)]
+    fn parts(state: &Vec<Slot<T>>, _: &EffectOutput<T>, out: &mut Vec<EffectOutput<T>>) {
+        out.extend(state.iter().map(|slot| slot.last));
+    }
+}
+
+/// How a compiled scene holds its effects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shape {
+    /// No effect: `Bushing<T, AnyBackbone<T>, ()>`.
+    BackboneOnly,
+    /// One effect `E`: `Bushing<T, AnyBackbone<T>, (E,)>`, the loop
+    /// monomorphised for it.
+    One,
+    /// Two or more: an [`EffectList`], one match per effect and step.
+    List,
+}
+
+impl Shape {
+    /// A short description.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::BackboneOnly => "backbone only",
+            Self::One => "one effect, monomorphised",
+            Self::List => "effect list",
+        }
+    }
+}
+
+/// A scene's bushing with its state, behind one object-safe interface, so
+/// that a driver dispatches once per chunk of steps while the steps
+/// themselves run in a loop monomorphised for the scene's shape (see
+/// [`compile`]).
+pub trait SceneModel<T: Real> {
+    /// How the effects are held.
+    fn shape(&self) -> Shape;
+    /// The backbone.
+    fn backbone(&self) -> &AnyBackbone<T>;
+    /// Long-term fraction g^0.
+    fn g0(&self) -> f64;
+    /// Number of effects (per-effect outputs per step).
+    fn effect_count(&self) -> usize;
+    /// Steps refused so far.
+    fn refused(&self) -> u32;
+    /// Steps through `inputs`, appending one row per step to `rows` and
+    /// [`SceneModel::effect_count`] outputs per step to `parts`.
+    fn step_into(
+        &mut self,
+        inputs: &[T],
+        rows: &mut Vec<StepRow<T>>,
+        parts: &mut Vec<EffectOutput<T>>,
+    );
+    /// Steps a fresh copy of the model from rest at `x0` through `inputs`,
+    /// reading force, tangent and dissipated energy as a control loop
+    /// does, and returns the wall-clock time of the steps alone (the
+    /// model's own state is left untouched).
+    fn time_steps(&self, inputs: &[T], x0: T) -> std::time::Duration;
+}
+
+/// A [`Bushing`] of the scene's backbone and effects `E`, with its state.
+struct Compiled<T: Real, E: Effect<T>> {
+    bushing: Bushing<T, AnyBackbone<T>, E>,
+    state: BushingState<T, E::State>,
+    shape: Shape,
+    count: usize,
+}
+
+impl<T: Real, E: Parts<T>> SceneModel<T> for Compiled<T, E> {
+    fn shape(&self) -> Shape {
+        self.shape
+    }
+    fn backbone(&self) -> &AnyBackbone<T> {
+        self.bushing.backbone()
+    }
+    fn g0(&self) -> f64 {
+        self.bushing.g0()
+    }
+    fn effect_count(&self) -> usize {
+        self.count
+    }
+    fn refused(&self) -> u32 {
+        self.state.rejected()
+    }
+    fn step_into(
+        &mut self,
+        inputs: &[T],
+        rows: &mut Vec<StepRow<T>>,
+        parts: &mut Vec<EffectOutput<T>>,
+    ) {
+        for &x in inputs {
+            let o = self.bushing.step(&mut self.state, x);
+            rows.push(StepRow {
+                force: o.force,
+                tangent: o.tangent,
+                dissipated: o.dissipated,
+                elastic: o.elastic,
+                refused: o.effects.is_none(),
+            });
+            match &o.effects {
+                Some(report) => E::parts(self.state.effects(), report, parts),
+                None => parts.extend((0..self.count).map(|_| EffectOutput::zero())),
+            }
+        }
+    }
+    fn time_steps(&self, inputs: &[T], x0: T) -> std::time::Duration {
+        stepping_pass(&self.bushing, inputs, x0)
+    }
+}
+
+/// Steps `bushing` from rest at `x0` through `inputs`, reading force,
+/// tangent and dissipated energy as a control loop does, and returns the
+/// wall-clock time of the steps. Never inlined, so that an instruction
+/// counter can select it by name (`cost --instructions`).
+#[inline(never)]
+pub fn stepping_pass<T: Real, B: Backbone<T>, E: Effect<T>>(
+    bushing: &Bushing<T, B, E>,
+    inputs: &[T],
+    x0: T,
+) -> std::time::Duration {
+    let mut state = bushing.state_at(x0);
+    let start = std::time::Instant::now();
+    for &x in inputs {
+        let o = bushing.step(&mut state, x);
+        std::hint::black_box((o.force, o.tangent, o.dissipated));
+    }
+    start.elapsed()
+}
+
+fn compiled<T: Real + 'static, E: Parts<T> + 'static>(
+    backbone: AnyBackbone<T>,
+    effects: E,
+    x0: T,
+    shape: Shape,
+    count: usize,
+) -> Result<Box<dyn SceneModel<T>>, ParamError> {
+    let bushing = Bushing::new(backbone, effects)?;
+    let state = bushing.state_at(x0);
+    Ok(Box::new(Compiled {
+        bushing,
+        state,
+        shape,
+        count,
+    }))
+}
+
+/// Builds the bushing a scene describes, with only its effects, at rest
+/// at the profile's start, in the cheapest shape for it: no effect is the
+/// bare backbone (`Bushing<_, _, ()>`), one effect is the bushing of that
+/// effect alone (`Bushing<_, _, (E,)>`, as firmware would declare it), and
+/// two or more are an [`EffectList`]. The steps are bit-identical to
+/// [`build`]'s in every shape.
+pub fn compile<T: Real + 'static>(scene: &Scene) -> Result<Box<dyn SceneModel<T>>, ParamError> {
+    let x0 = T::from_f64(crate::profile::displacement(&scene.profile, 0.0));
+    let list = build::<T>(scene)?;
+    let backbone = list.backbone().clone();
+    let mut effects = list.effects().effects().to_vec();
+    match (effects.pop(), effects.is_empty()) {
+        (None, _) => compiled(backbone, (), x0, Shape::BackboneOnly, 0),
+        (Some(last), true) => each_effect!(last, |e| compiled(backbone, (e,), x0, Shape::One, 1)),
+        (Some(last), false) => {
+            effects.push(last);
+            let count = effects.len();
+            compiled(backbone, EffectList { effects }, x0, Shape::List, count)
+        }
+    }
+}

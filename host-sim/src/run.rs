@@ -28,7 +28,7 @@ use std::time::{Duration, Instant};
 use bushing::Real;
 use bushing::tracker::{Channel, ModulusSpec, ModulusState, ModulusTracker, SineSpec};
 
-use crate::model::{self, SceneBushing};
+use crate::model::{self, StepRow};
 use crate::profile;
 use crate::scene::{NumberType, Scene};
 use crate::svg::{self, Plot, Series};
@@ -149,8 +149,12 @@ pub fn column_name(effect: &str) -> String {
     effect.replace([' ', ','], "_")
 }
 
-fn run_typed<T: Real>(scene: &Scene, out: &Path, options: Options) -> Result<Summary, String> {
-    let bushing: SceneBushing<T> = model::build(scene).map_err(|e| e.to_string())?;
+fn run_typed<T: Real + 'static>(
+    scene: &Scene,
+    out: &Path,
+    options: Options,
+) -> Result<Summary, String> {
+    let mut bushing = model::compile::<T>(scene).map_err(|e| e.to_string())?;
     fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let trace_path = out.join("trace.csv");
     let file =
@@ -176,9 +180,9 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path, options: Options) -> Result<Sum
     let x0 = profile::displacement(&scene.profile, 0.0);
     let (_, k0) = bushing::Backbone::eval(bushing.backbone(), T::from_f64(x0));
     let mut probe = ModulusProbe::new(scene.dt, k0.to_f64());
-    let mut state = bushing.state_at(T::from_f64(x0));
     let mut inputs = Vec::with_capacity(CHUNK);
-    let mut outputs = Vec::with_capacity(CHUNK);
+    let mut outputs: Vec<StepRow<T>> = Vec::with_capacity(CHUNK);
+    let mut parts = Vec::with_capacity(CHUNK * names.len());
     let mut busy = 0.0f64;
     let mut energy = 0.0f64;
     let mut peak = 0.0f64;
@@ -192,10 +196,9 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path, options: Options) -> Result<Sum
             inputs.push(T::from_f64(profile::displacement(&scene.profile, t)));
         }
         outputs.clear();
+        parts.clear();
         let start = Instant::now();
-        for &x in &inputs {
-            outputs.push(bushing.step(&mut state, x));
-        }
+        bushing.step_into(&inputs, &mut outputs, &mut parts);
         busy += start.elapsed().as_secs_f64();
         let mut line = String::new();
         for (k, (x, o)) in inputs.iter().zip(&outputs).enumerate() {
@@ -213,21 +216,21 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path, options: Options) -> Result<Sum
             force_t.push(1, t, elastic);
             power_t.push(0, t, step_energy / scene.dt);
             energy_t.push(0, t, energy);
-            match &o.effects {
-                Some(_) => {
-                    let parts = model::effect_outputs::<T>(&state);
-                    for (j, e) in parts.iter().enumerate() {
-                        let (ef, ed) = (e.force.to_f64(), e.dissipated.to_f64());
-                        line.push_str(&format!(",{ef:e}"));
-                        force_t.push(j + 2, t, ef);
-                        power_t.push(j + 1, t, ed / scene.dt);
-                        if let Some(total) = effect_energy.get_mut(j) {
-                            *total += ed;
-                            energy_t.push(j + 1, t, *total);
-                        }
+            if o.refused {
+                names.iter().for_each(|_| line.push_str(",nan"));
+            } else {
+                let count = names.len();
+                let this_step = parts.get(k * count..(k + 1) * count).unwrap_or_default();
+                for (j, e) in this_step.iter().enumerate() {
+                    let (ef, ed) = (e.force.to_f64(), e.dissipated.to_f64());
+                    line.push_str(&format!(",{ef:e}"));
+                    force_t.push(j + 2, t, ef);
+                    power_t.push(j + 1, t, ed / scene.dt);
+                    if let Some(total) = effect_energy.get_mut(j) {
+                        *total += ed;
+                        energy_t.push(j + 1, t, *total);
                     }
                 }
-                None => names.iter().for_each(|_| line.push_str(",nan")),
             }
             line.push_str(&format!(",{energy:e}"));
             writeln!(csv, "{line}").map_err(|e| e.to_string())?;
@@ -352,7 +355,7 @@ fn run_typed<T: Real>(scene: &Scene, out: &Path, options: Options) -> Result<Sum
         ns_per_step: busy * 1e9 / steps.max(1) as f64,
         dissipated_mj: energy,
         peak_force: peak,
-        refused: state.rejected(),
+        refused: bushing.refused(),
         modulus,
         files,
     })

@@ -29,7 +29,7 @@ use std::fmt;
 
 use bushing::{BoucWen, KfTable, MaxwellBank, MaxwellForm, MaxwellSpec, Real, Relaxation, Sts};
 
-use crate::model::{self, SceneBushing};
+use crate::model;
 use crate::profile;
 use crate::scene::{
     BackboneSpec, Effect, Friction, Law, NumberType, ProfileSpec, Scene, TABLE_POINTS,
@@ -247,8 +247,8 @@ impl Window {
     }
 }
 
-fn validate_typed<T: Real>(scene: &Scene) -> Result<Report, String> {
-    let bushing: SceneBushing<T> = model::build(scene).map_err(|e| e.to_string())?;
+fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
+    let mut bushing = model::compile::<T>(scene).map_err(|e| e.to_string())?;
     let names = model::effect_names(scene);
     let none = |why: &str| Report {
         context: format!("validate: {why}"),
@@ -288,22 +288,20 @@ fn validate_typed<T: Real>(scene: &Scene) -> Result<Report, String> {
         low: vec![f64::INFINITY; n],
         high: vec![f64::NEG_INFINITY; n],
     };
-    let x0 = profile::displacement(&scene.profile, 0.0);
-    let mut state = bushing.state_at(T::from_f64(x0));
     let mut forces = vec![f64::NAN; n];
+    let (mut rows, mut outputs) = (Vec::with_capacity(1), Vec::with_capacity(n));
     for i in 1..=end {
         let t = i as f64 * scene.dt;
         let x = profile::displacement(&scene.profile, t);
-        let o = bushing.step(&mut state, T::from_f64(x));
+        rows.clear();
+        outputs.clear();
+        bushing.step_into(&[T::from_f64(x)], &mut rows, &mut outputs);
         if i <= start {
             continue;
         }
+        let Some(o) = rows.first() else { continue };
         let elastic = o.elastic.to_f64();
-        let parts = o
-            .effects
-            .as_ref()
-            .map(|_| model::effect_outputs::<T>(&state))
-            .unwrap_or_default();
+        let parts: &[_] = if o.refused { &[] } else { &outputs };
         for (j, f) in forces.iter_mut().enumerate() {
             let e = parts.get(j);
             *f = e.map_or(f64::NAN, |e| e.force.to_f64());
@@ -334,7 +332,7 @@ fn validate_typed<T: Real>(scene: &Scene) -> Result<Report, String> {
         scene.number.name(),
         whole - cycles + 1,
         end as f64 * scene.dt,
-        state.rejected()
+        bushing.refused()
     );
     let k_lin = linear_stiffness(&scene.backbone);
     let ctx = Ctx {

@@ -616,17 +616,20 @@ impl Panic {
     }
 }
 
-fn step_model<T: Real>(scene: &Scene) -> Result<(), String> {
-    let bushing = model::build::<T>(scene).map_err(|e| e.to_string())?;
+fn step_model<T: Real + 'static>(scene: &Scene) -> Result<(), String> {
+    let mut bushing = model::compile::<T>(scene).map_err(|e| e.to_string())?;
     let names = model::effect_names(scene);
-    let x0 = profile::displacement(&scene.profile, 0.0);
-    let mut state = bushing.state_at(T::from_f64(x0));
-    for n in 1..=scene.steps().min(STEPPED) {
-        let x = profile::displacement(&scene.profile, n as f64 * scene.dt);
-        bushing.step(&mut state, T::from_f64(x));
-        let per_effect = model::effect_outputs::<T>(&state);
-        assert_eq!(per_effect.len(), names.len(), "one output per effect");
-    }
+    let inputs: Vec<T> = (1..=scene.steps().min(STEPPED))
+        .map(|n| T::from_f64(profile::displacement(&scene.profile, n as f64 * scene.dt)))
+        .collect();
+    let (mut rows, mut parts) = (Vec::new(), Vec::new());
+    bushing.step_into(&inputs, &mut rows, &mut parts);
+    assert_eq!(rows.len(), inputs.len(), "one row per step");
+    assert_eq!(
+        parts.len(),
+        inputs.len() * names.len(),
+        "one output per effect"
+    );
     Ok(())
 }
 

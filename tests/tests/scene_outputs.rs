@@ -367,9 +367,91 @@ fn cost_lists_every_part_and_adds_them_up() {
         "{text}"
     );
     assert_eq!(report.parts.len(), 4);
+    assert_eq!(report.shape, bushing_sim::model::Shape::List);
+    assert!(text.contains("scene (effect list)"), "{text}");
     assert!(
-        text.lines()
-            .any(|l| l.starts_with("for comparison, MaxwellBank<f32, 3> (const size)")),
+        text.lines().any(|l| l
+            == "for comparison: maxwell rate-exact-ramp x3 as a const-size MaxwellBank<f32, 3>, effect only"),
         "{text}"
     );
+}
+
+#[test]
+fn a_one_effect_scene_is_costed_as_its_own_bushing_type_and_as_a_list() {
+    let scene = Scene::load(&root().join("scenes/maxwell4.toml")).unwrap();
+    let options = cost::CostOptions {
+        min_steps: 10_000,
+        max_steps: 10_000,
+        repetitions: 1,
+    };
+    let report = cost::cost_with(&scene, options).unwrap();
+    assert_eq!(report.shape, bushing_sim::model::Shape::One);
+    assert_eq!(report.measure, cost::Measure::WallClock);
+    let names: Vec<_> = report.comparisons.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "the whole scene as an effect list (model::build)",
+            "maxwell rate-exact-ramp x4 as a const-size MaxwellBank<f32, 4>, effect only"
+        ]
+    );
+    assert!(report.comparisons.iter().all(|p| p.ns_per_step.is_finite()));
+    // The hidden child command of `cost --instructions` refuses a part
+    // the plan does not have.
+    let err = cost::run_part(&scene, 5, 10).unwrap_err();
+    assert_eq!(err, "no part 5 (the scene has 5)");
+    assert_eq!(cost::run_part(&scene, 4, 10), Ok(()));
+}
+
+/// The trace of `scene`: header and rows.
+fn trace(scene: &str) -> (Vec<String>, Vec<Vec<f64>>) {
+    let scene = Scene::load(&root().join(scene)).unwrap();
+    let out = out_dir(&format!("columns-{}", scene.effects.len()));
+    run::run(&scene, &out).unwrap();
+    let text = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+#[test]
+fn every_trace_row_has_that_steps_effect_forces() {
+    // The bushing's force is g0 F_inf + (((0 + F_1) + F_2) + ...) in the
+    // scene's type; each column is printed exactly (f32 through f64), so
+    // the row must add up bit for bit. Each effect column changes on at
+    // least a tenth of the rows (a saturated friction cell holds its force
+    // while it slides; a column repeated over a chunk of steps would change
+    // once in thousands of rows).
+    for (file, effects) in [
+        ("scenes/maxwell4.toml", 1),
+        ("scenes/hysteresis-triangle.toml", 3),
+        ("scenes/friction-cells.toml", 3),
+    ] {
+        let (header, rows) = trace(file);
+        assert_eq!(header.len(), 5 + effects, "{file}: {header:?}");
+        assert!(rows.len() > 4096, "{file}: {} rows", rows.len());
+        for (i, row) in rows.iter().enumerate() {
+            let sum = row[4..4 + effects]
+                .iter()
+                .fold(0.0f32, |acc, &f| acc + f as f32);
+            assert_eq!(
+                row[3] as f32 + sum,
+                row[2] as f32,
+                "{file}, row {i}: {row:?}"
+            );
+        }
+        for j in 4..4 + effects {
+            let changes = rows.windows(2).filter(|w| w[0][j] != w[1][j]).count();
+            assert!(
+                changes * 10 >= rows.len(),
+                "{file}: column {} changes on {changes} of {} rows",
+                header[j],
+                rows.len()
+            );
+        }
+    }
 }

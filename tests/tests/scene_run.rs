@@ -52,7 +52,9 @@ fn quickstart_scene_writes_trace_and_plot_equal_to_the_firmware_kernel() {
         let x = row[1] as f32;
         let o = b.step(&mut s, x);
         assert_eq!(o.force, row[2] as f32, "force at t = {}", row[0]);
-        assert_eq!(o.elastic + o.effects.unwrap().0.force, row[2] as f32);
+        let effect = o.effects.unwrap().0.force;
+        assert_eq!(effect, row[4] as f32, "effect column at t = {}", row[0]);
+        assert_eq!(o.elastic + effect, row[2] as f32);
         energy += o.dissipated as f64;
     }
     let last = rows.last().unwrap();
@@ -214,4 +216,85 @@ fn every_scene_in_scenes_runs_and_plots() {
         assert!(plots >= 3, "{name}: {plots} plots");
         std::fs::remove_dir_all(out).ok();
     }
+}
+
+/// Steps `scene` both ways: compiled (as `run` does) and as the general
+/// effect list, and demands the same rows and per-effect outputs, bit for
+/// bit.
+fn compiled_equals_list<T: bushing::Real + 'static>(scene: &Scene) {
+    use bushing_sim::model::{self, Shape};
+    let mut compiled = model::compile::<T>(scene).unwrap();
+    let expected = match scene.effects.len() {
+        0 => Shape::BackboneOnly,
+        1 => Shape::One,
+        _ => Shape::List,
+    };
+    assert_eq!(compiled.shape(), expected, "{}", scene.title);
+    assert_eq!(compiled.effect_count(), scene.effects.len());
+    let list = model::build::<T>(scene).unwrap();
+    assert_eq!(compiled.g0(), list.g0());
+    let x0 = bushing_sim::profile::displacement(&scene.profile, 0.0);
+    let mut state = list.state_at(T::from_f64(x0));
+    let steps = scene.steps().min(50_000);
+    let inputs: Vec<T> = (1..=steps)
+        .map(|n| {
+            T::from_f64(bushing_sim::profile::displacement(
+                &scene.profile,
+                n as f64 * scene.dt,
+            ))
+        })
+        .collect();
+    let (mut rows, mut parts) = (Vec::new(), Vec::new());
+    for chunk in inputs.chunks(1000) {
+        compiled.step_into(chunk, &mut rows, &mut parts);
+    }
+    assert_eq!(rows.len(), inputs.len());
+    assert_eq!(parts.len(), inputs.len() * scene.effects.len());
+    let count = scene.effects.len();
+    for (n, (&x, row)) in inputs.iter().zip(&rows).enumerate() {
+        let o = list.step(&mut state, x);
+        let bits = |v: T| v.bits();
+        assert_eq!(
+            [row.force, row.tangent, row.dissipated, row.elastic].map(bits),
+            [o.force, o.tangent, o.dissipated, o.elastic].map(bits),
+            "{}: step {n}",
+            scene.title
+        );
+        assert_eq!(row.refused, o.effects.is_none());
+        let mine = &parts[n * count..(n + 1) * count];
+        let theirs = model::effect_outputs(&state);
+        for (a, b) in mine.iter().zip(&theirs) {
+            assert_eq!(
+                [a.force, a.tangent, a.dissipated].map(bits),
+                [b.force, b.tangent, b.dissipated].map(bits),
+                "{}: step {n}",
+                scene.title
+            );
+        }
+    }
+    assert_eq!(compiled.refused(), state.rejected());
+}
+
+#[test]
+fn every_scene_compiled_steps_bit_for_bit_as_the_effect_list() {
+    let mut seen = 0;
+    for entry in std::fs::read_dir(root().join("scenes")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let scene = Scene::load(&path).unwrap();
+        compiled_equals_list::<f32>(&scene);
+        compiled_equals_list::<f64>(&scene);
+        // The same scene with its first effect only, and with none.
+        for keep in [1, 0] {
+            let sub = Scene {
+                effects: scene.effects.iter().take(keep).cloned().collect(),
+                ..scene.clone()
+            };
+            compiled_equals_list::<f32>(&sub);
+        }
+        seen += 1;
+    }
+    assert!(seen >= 10, "{seen} scenes");
 }
