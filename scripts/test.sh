@@ -9,7 +9,8 @@
 #      QEMU's exit code is the verdict, a hang is killed by `timeout`;
 #   4. the step-cost firmware under QEMU (guest instructions per step);
 #   5. the host tests (unit, integration, doc);
-#   6. a scene's cost against its parts in host instructions (callgrind),
+#   6. every scene of scenes/ run with the README's command form;
+#   7. a scene's cost against its parts in host instructions (callgrind),
 #      printed, never asserted.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -72,6 +73,17 @@ cargo run -p bushing-boards --release --target thumbv7em-none-eabihf --bin step-
 
 step "host tests"
 cargo test
+
+step "every scene, with the README's command form (run SCENE --out DIR)"
+cargo build -q -p bushing-sim --release
+find scenes -name '*.toml' | sort | while read -r scene; do
+    name=${scene#scenes/}
+    out="target/scenes/${name%.toml}"
+    mkdir -p "$out"
+    ./target/release/bushing-sim run "$scene" --out "$out" >"$out.log" 2>&1 \
+        || { cat "$out.log"; echo "error: $scene failed" >&2; exit 1; }
+    printf '%-48s %s\n' "$scene" "$(grep -E '^steps' "$out.log" | tr -s ' ')"
+done
 
 step "scene cost against the sum of its parts (host instructions, callgrind)"
 cargo run -q -p bushing-sim --release -- cost --instructions scenes/maxwell4.toml

@@ -58,6 +58,16 @@ pub enum ParamError {
         /// Sum of the fractions.
         sum: f64,
     },
+    /// The load fraction g of one cell is above one: a single cell would
+    /// take more than the whole backbone (g must be in (0, 1]; a g that is
+    /// not positive is [`ParamError::NotPositive`]).
+    CellFractionAboveOne {
+        /// Cell index in its bank; `None` for a cell that is not part of a
+        /// bank (the fractional cell).
+        cell: Option<usize>,
+        /// The fraction given.
+        g: f64,
+    },
     /// An explicit scheme (eqs 1.13, 1.16) was asked for a cell with
     /// `omega * dt >= 1`, where its pole `1 - omega*dt` is no longer in (0, 1).
     ExplicitUnstable {
@@ -154,6 +164,15 @@ impl fmt::Display for ParamError {
                 f,
                 "load fractions g add up to {sum}, above 1: the long-term gain g0 = 1 - sum(g) would be negative"
             ),
+            Self::CellFractionAboveOne { cell, g } => {
+                if let Some(i) = cell {
+                    write!(f, "cells[{i}].")?;
+                }
+                write!(
+                    f,
+                    "g = {g} must be in (0, 1]: a single cell cannot take more than the whole backbone"
+                )
+            }
             Self::ExplicitUnstable { cell, omega_dt } => write!(
                 f,
                 "cell {cell}: omega*dt = {omega_dt} >= 1, outside the range of an explicit scheme; use an exponential form or a smaller dt"
@@ -300,6 +319,22 @@ mod tests {
             Err(ParamError::NotFinite { param: p })
         );
         assert_eq!(finite(p, -1.0), Ok(-1.0));
+    }
+
+    #[test]
+    fn a_cell_fraction_above_one_names_the_cell_and_the_bound() {
+        let e = ParamError::CellFractionAboveOne {
+            cell: Some(1),
+            g: 1.2,
+        };
+        let text = alloc::format!("{e}");
+        assert!(
+            text.starts_with("cells[1].g = 1.2 must be in (0, 1]"),
+            "{text}"
+        );
+        let e = ParamError::CellFractionAboveOne { cell: None, g: 1.5 };
+        let text = alloc::format!("{e}");
+        assert!(text.starts_with("g = 1.5 must be in (0, 1]"), "{text}");
     }
 
     #[test]

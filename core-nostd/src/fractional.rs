@@ -68,7 +68,7 @@ impl FractionalSpec {
         }
         let g = positive(Param::scalar("g"), self.g)?;
         if g > 1.0 {
-            return Err(ParamError::FractionsAboveOne { sum: g });
+            return Err(ParamError::CellFractionAboveOne { cell: None, g });
         }
         Ok(())
     }
@@ -420,7 +420,7 @@ mod tests {
         let e = Grunwald::<f64, 4>::new(FractionalSpec::new(-1.0, 0.5, 0.5), 1e-3).unwrap_err();
         assert!(matches!(e, ParamError::NotPositive { param, .. } if param.name == "omega_c"));
         let e = Grunwald::<f64, 4>::new(FractionalSpec::new(1.0, 0.5, 1.5), 1e-3).unwrap_err();
-        assert!(matches!(e, ParamError::FractionsAboveOne { .. }));
+        assert_eq!(e, ParamError::CellFractionAboveOne { cell: None, g: 1.5 });
         let e = Grunwald::<f64, 0>::new(FractionalSpec::new(1.0, 0.5, 0.5), 1e-3).unwrap_err();
         assert!(matches!(e, ParamError::TooFew { .. }));
         let e = Grunwald::<f64, 4>::new(FractionalSpec::new(1.0, 0.5, 0.5), 0.0).unwrap_err();

@@ -74,7 +74,7 @@ impl IwanCellSpec {
     fn check(&self, i: usize) -> Result<(f64, f64), ParamError> {
         let g = positive(Param::item("g", i), self.g)?;
         if g > 1.0 {
-            return Err(ParamError::FractionsAboveOne { sum: g });
+            return Err(ParamError::CellFractionAboveOne { cell: Some(i), g });
         }
         let f = positive(Param::item("slip_force", i), self.slip_force)?;
         Ok((g, f))
@@ -411,6 +411,13 @@ mod tests {
         assert_eq!(
             IwanBank::<f64, 2>::new(&[IwanCellSpec::new(0.7, 1.0), IwanCellSpec::new(0.7, 1.0)]),
             Err(ParamError::FractionsAboveOne { sum: 1.4 })
+        );
+        assert_eq!(
+            IwanBank::<f64, 2>::new(&[IwanCellSpec::new(0.1, 1.0), IwanCellSpec::new(1.2, 1.0)]),
+            Err(ParamError::CellFractionAboveOne {
+                cell: Some(1),
+                g: 1.2
+            })
         );
         assert!(matches!(
             IwanSliders::<f64, 1>::new(&[IwanCellSpec::new(0.1, 1.0)], -1.0),

@@ -161,7 +161,10 @@ impl<T: Real> MaxwellCell<T> {
         let omega = positive(Param::item("omega", index), spec.omega)?;
         let g = positive(Param::item("g", index), spec.g)?;
         if g > 1.0 {
-            return Err(ParamError::FractionsAboveOne { sum: g });
+            return Err(ParamError::CellFractionAboveOne {
+                cell: Some(index),
+                g,
+            });
         }
         let h = omega * dt;
         if !h.is_finite() {
@@ -552,6 +555,13 @@ mod tests {
                 1e-3
             ),
             Err(ParamError::FractionsAboveOne { sum: 1.2 })
+        );
+        assert_eq!(
+            B::new(f, &[ok, MaxwellSpec::new(2.0, 1.2)], 1e-3),
+            Err(ParamError::CellFractionAboveOne {
+                cell: Some(1),
+                g: 1.2
+            })
         );
     }
 

@@ -115,7 +115,10 @@ impl<T: Real> XfCell<T> {
         }
         let g = positive(Param::item("g", index), spec.g)?;
         if g > 1.0 {
-            return Err(ParamError::FractionsAboveOne { sum: g });
+            return Err(ParamError::CellFractionAboveOne {
+                cell: Some(index),
+                g,
+            });
         }
         let x_f = positive(Param::item("x_f", index), spec.x_f)?;
         Ok(Self {
@@ -392,5 +395,12 @@ mod tests {
             XfBank::<f64, 1>::new(XfForm::Midpoint, &[XfSpec { omega: -1.0, ..ok }], 1e-3),
             Err(ParamError::NotPositive { .. })
         ));
+        assert_eq!(
+            XfBank::<f64, 2>::new(XfForm::Midpoint, &[ok, XfSpec { g: 1.2, ..ok }], 1e-3),
+            Err(ParamError::CellFractionAboveOne {
+                cell: Some(1),
+                g: 1.2
+            })
+        );
     }
 }

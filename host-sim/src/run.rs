@@ -210,20 +210,28 @@ fn run_typed<T: Real + 'static>(
             let xf = x.to_f64();
             let elastic = o.elastic.to_f64();
             peak = peak.max(f.abs());
+            let write_row = i.is_multiple_of(scene.trace_every) || i == steps;
             line.clear();
-            line.push_str(&format!("{t:.9},{xf:e},{f:e},{elastic:e}"));
+            if write_row {
+                line.push_str(&format!("{t:.9},{xf:e},{f:e},{elastic:e}"));
+            }
             force_t.push(0, t, f);
             force_t.push(1, t, elastic);
             power_t.push(0, t, step_energy / scene.dt);
             energy_t.push(0, t, energy);
+            // Steps without a trace row still feed the plots and energies.
             if o.refused {
-                names.iter().for_each(|_| line.push_str(",nan"));
+                if write_row {
+                    names.iter().for_each(|_| line.push_str(",nan"));
+                }
             } else {
                 let count = names.len();
                 let this_step = parts.get(k * count..(k + 1) * count).unwrap_or_default();
                 for (j, e) in this_step.iter().enumerate() {
                     let (ef, ed) = (e.force.to_f64(), e.dissipated.to_f64());
-                    line.push_str(&format!(",{ef:e}"));
+                    if write_row {
+                        line.push_str(&format!(",{ef:e}"));
+                    }
                     force_t.push(j + 2, t, ef);
                     power_t.push(j + 1, t, ed / scene.dt);
                     if let Some(total) = effect_energy.get_mut(j) {
@@ -232,8 +240,10 @@ fn run_typed<T: Real + 'static>(
                     }
                 }
             }
-            line.push_str(&format!(",{energy:e}"));
-            writeln!(csv, "{line}").map_err(|e| e.to_string())?;
+            if write_row {
+                line.push_str(&format!(",{energy:e}"));
+                writeln!(csv, "{line}").map_err(|e| e.to_string())?;
+            }
             if i.is_multiple_of(stride) {
                 loop_points.push((xf, f));
                 elastic_points.push((xf, elastic));
@@ -344,7 +354,10 @@ fn run_typed<T: Real + 'static>(
         write(
             &mut files,
             "modulus-amplitude.svg",
-            modulus_plot(&modulus, &title("Instantaneous complex modulus")).render(),
+            svg::render_panels(&modulus_plots(
+                &modulus,
+                &title("Instantaneous complex modulus"),
+            )),
         )?;
     }
 
@@ -378,60 +391,58 @@ pub fn modulus_csv(points: &[ModulusPoint]) -> String {
     s
 }
 
-/// Storage and loss moduli against the imposed amplitude, one pair of
-/// series per frequency and mean displacement (seed 000 Fig 1.24); the
-/// amplitude axis is logarithmic when the amplitudes span more than a
-/// factor 3.
-pub fn modulus_plot(points: &[ModulusPoint], title: &str) -> Plot {
+/// The modulus plot: storage K′ and loss K″ against the imposed amplitude,
+/// one series per frequency; one panel per preload when there are several
+/// (so that each legend stays short).
+pub fn modulus_plots(points: &[ModulusPoint], title: &str) -> Vec<Plot> {
     // Means within 1 µm are one preload (+ 0.0 turns -0 into 0).
-    let key = |p: &ModulusPoint| (p.frequency_hz, (p.mean_mm * 1e3).round() / 1e3 + 0.0);
-    let mut groups: Vec<(f64, f64)> = Vec::new();
-    for p in points {
-        if !groups.contains(&key(p)) {
-            groups.push(key(p));
-        }
-    }
-    let preloads = {
-        let mut m: Vec<f64> = groups.iter().map(|g| g.1).collect();
-        m.dedup();
-        m.sort_by(f64::total_cmp);
-        m.dedup();
-        m.len()
-    };
-    let mut series = Vec::new();
-    for g in groups {
-        let at = || points.iter().filter(move |p| key(p) == g);
-        let label = if preloads > 1 {
-            format!("{} Hz, mean x {} mm", g.0, g.1)
-        } else {
-            format!("{} Hz", g.0)
-        };
-        series.push(Series::markers(
-            format!("storage K' at {label}"),
-            at().map(|p| (p.amplitude_mm, p.storage)).collect(),
-        ));
-        series.push(Series::markers(
-            format!("loss K'' at {label}"),
-            at().map(|p| (p.amplitude_mm, p.loss)).collect(),
-        ));
-    }
+    let mean = |p: &ModulusPoint| (p.mean_mm * 1e3).round() / 1e3 + 0.0;
+    let mut preloads: Vec<f64> = points.iter().map(mean).collect();
+    preloads.sort_by(f64::total_cmp);
+    preloads.dedup();
     let (lo, hi) = points
         .iter()
         .map(|p| p.amplitude_mm)
         .filter(|a| *a > 0.0 && a.is_finite())
         .fold((f64::INFINITY, 0.0f64), |(l, h), a| (l.min(a), h.max(a)));
-    let title = if points.is_empty() {
-        format!("{title} (no sine held at one frequency for 3 periods)")
-    } else {
-        title.to_string()
+    let panel = |title: String, at: &dyn Fn(&ModulusPoint) -> bool| {
+        let mut frequencies: Vec<f64> = Vec::new();
+        for p in points.iter().filter(|p| at(p)) {
+            if !frequencies.contains(&p.frequency_hz) {
+                frequencies.push(p.frequency_hz);
+            }
+        }
+        let mut series = Vec::new();
+        for f in frequencies {
+            let of = || points.iter().filter(move |p| at(p) && p.frequency_hz == f);
+            series.push(Series::markers(
+                format!("storage K' at {f} Hz"),
+                of().map(|p| (p.amplitude_mm, p.storage)).collect(),
+            ));
+            series.push(Series::markers(
+                format!("loss K'' at {f} Hz"),
+                of().map(|p| (p.amplitude_mm, p.loss)).collect(),
+            ));
+        }
+        Plot {
+            title,
+            x_label: "imposed amplitude X [mm]".into(),
+            y_label: "modulus K', K'' [N/mm]".into(),
+            x_log: hi > 3.0 * lo,
+            series,
+        }
     };
-    Plot {
-        title,
-        x_label: "imposed amplitude X [mm]".into(),
-        y_label: "modulus K', K'' [N/mm]".into(),
-        x_log: hi > 3.0 * lo,
-        series,
+    if points.is_empty() {
+        let title = format!("{title} (no sine held at one frequency for 3 periods)");
+        return vec![panel(title, &|_| true)];
     }
+    if preloads.len() <= 1 {
+        return vec![panel(title.to_string(), &|_| true)];
+    }
+    preloads
+        .iter()
+        .map(|&m| panel(format!("{title}, mean x {m} mm"), &move |p| mean(p) == m))
+        .collect()
 }
 
 /// Time-plot decimation: the smallest and the largest value of each bucket

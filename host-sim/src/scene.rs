@@ -15,7 +15,32 @@ use bushing::{
     XfForm, XfSpec,
 };
 use serde::Deserialize;
+use serde::de::{self, DeserializeSeed, Visitor};
 use toml::Spanned;
+use toml::de::{DeTable, DeValue, ValueDeserializer};
+
+/// Declares a table whose variant its `type` key names
+/// (`#[serde(tag = "type")]`), and beside it the same variants read
+/// externally tagged: `$by_tag::deserialize` (a serde `remote` of the enum)
+/// reads a table's content, without its `type`, as the variant `type`
+/// names. Serde reads a tagged table through a buffer that forgets where
+/// each value was, so a wrong value inside one is reported at the table;
+/// read again by [`tagged_mistake`], the same mistake points at the value.
+macro_rules! tagged_table {
+    (
+        $(#[$meta:meta])*
+        pub enum $name:ident, read by tag as $by_tag:ident($remote:literal) $body:tt
+    ) => {
+        $(#[$meta])*
+        #[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+        pub enum $name $body
+
+        #[derive(Deserialize)]
+        #[serde(remote = $remote, rename_all = "kebab-case", deny_unknown_fields)]
+        #[allow(dead_code)] // never built: its `deserialize` builds the public enum
+        enum $by_tag $body
+    };
+}
 
 /// A scene file, as written.
 #[derive(Debug, Clone, Deserialize)]
@@ -33,6 +58,23 @@ pub struct SceneFile {
     pub effects: Vec<Spanned<EffectSpec>>,
     /// Displacement profile.
     pub profile: Spanned<ProfileSpec>,
+    /// What `run` writes; optional.
+    #[serde(default)]
+    pub output: Option<Spanned<OutputSpec>>,
+}
+
+/// `[output]`: what `run` writes.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Write every n-th step to `trace.csv` (and always the last); the
+    /// plots, energies and modulus points still see every step.
+    #[serde(default = "default_trace_every")]
+    pub trace_every: i64,
+}
+
+fn default_trace_every() -> i64 {
+    1
 }
 
 /// `[run]`: time step and number type.
@@ -67,87 +109,89 @@ impl NumberType {
     }
 }
 
-/// `[backbone]`: F^∞(x) in N for x in mm.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum BackboneSpec {
-    /// F = c0 + c1 x + c2 x^2 + ... on `range`, linear outside.
-    Polynomial {
-        /// Coefficients c0, c1, ... (N/mm^k), at most 8.
-        coefficients: Vec<f64>,
-        /// Validity range [lo, hi] in mm.
-        range: [f64; 2],
-    },
-    /// Monotone cubic spline through measured points, linear outside.
-    Spline {
-        /// Displacements in mm, increasing.
-        x: Vec<f64>,
-        /// Forces in N, increasing.
-        force: Vec<f64>,
-    },
+tagged_table! {
+    /// `[backbone]`: F^∞(x) in N for x in mm.
+    #[derive(Debug, Clone, Deserialize)]
+    pub enum BackboneSpec, read by tag as BackboneByTag("BackboneSpec") {
+        /// F = c0 + c1 x + c2 x^2 + ... on `range`, linear outside.
+        Polynomial {
+            /// Coefficients c0, c1, ... (N/mm^k), at most 8.
+            coefficients: Vec<f64>,
+            /// Validity range [lo, hi] in mm.
+            range: [f64; 2],
+        },
+        /// Monotone cubic spline through measured points, linear outside.
+        Spline {
+            /// Displacements in mm, increasing.
+            x: Vec<f64>,
+            /// Forces in N, increasing.
+            force: Vec<f64>,
+        },
+    }
 }
 
-/// One `[[effects]]` table.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum EffectSpec {
-    /// A bank of Maxwell cells.
-    Maxwell {
-        /// Discrete form: load-explicit, load-exponential, rate-explicit,
-        /// rate-midpoint or rate-exact-ramp.
-        form: String,
-        /// State storage: "plain" or "compensated".
-        #[serde(default = "default_state")]
-        state: String,
-        /// The cells.
-        cells: Vec<CellSpec>,
-    },
-    /// A bank of Jenkins cells (Iwan).
-    Iwan {
-        /// "clamp" (force saturation, eq 1.32) or "slider" (eq 1.30).
-        form: String,
-        /// Reference stiffness in N/mm that turns slip distances into slip
-        /// forces (and the slider springs); default: backbone tangent at 0.
-        #[serde(default)]
-        k_ref: Option<f64>,
-        /// The cells.
-        cells: Vec<IwanCellToml>,
-    },
-    /// Hysteretic relaxation with a turning-point stack (eqs 1.27-1.29,
-    /// 1.41-1.42).
-    TurningPoints {
-        /// "sts" (continuous STS, needs `c` and `k1`) or "table" (measured
-        /// K_f, needs `d` and `k`).
-        law: String,
-        /// STS constant C in N²/mm.
-        #[serde(default)]
-        c: Option<f64>,
-        /// STS stiffness at a turning point K_1 in N/mm.
-        #[serde(default)]
-        k1: Option<f64>,
-        /// Table: distances from the turning point in mm.
-        #[serde(default)]
-        d: Option<Vec<f64>>,
-        /// Table: K_f in N/mm, non-increasing.
-        #[serde(default)]
-        k: Option<Vec<f64>>,
-        /// "masing" (default) or "ignored".
-        #[serde(default = "default_first_loading")]
-        first_loading: String,
-    },
-    /// A bank of nonlinear viscous x_f cells (eq 1.52).
-    Xf {
-        /// "midpoint" (eq 2.41) or "exact-ramp".
-        form: String,
-        /// The cells.
-        cells: Vec<XfCellToml>,
-    },
-    /// Dahl's friction cell (eq 1.43).
-    Dahl(DahlParams),
-    /// The Bouc-Wen cell (eq 1.44, the thesis's naming).
-    BoucWen(BoucWenParams),
-    /// Berg's friction cell (eq 1.45).
-    Berg(BergParams),
+tagged_table! {
+    /// One `[[effects]]` table.
+    #[derive(Debug, Clone, Deserialize)]
+    pub enum EffectSpec, read by tag as EffectByTag("EffectSpec") {
+        /// A bank of Maxwell cells.
+        Maxwell {
+            /// Discrete form: load-explicit, load-exponential, rate-explicit,
+            /// rate-midpoint or rate-exact-ramp.
+            form: String,
+            /// State storage: "plain" or "compensated".
+            #[serde(default = "default_state")]
+            state: String,
+            /// The cells.
+            cells: Vec<CellSpec>,
+        },
+        /// A bank of Jenkins cells (Iwan).
+        Iwan {
+            /// "clamp" (force saturation, eq 1.32) or "slider" (eq 1.30).
+            form: String,
+            /// Reference stiffness in N/mm that turns slip distances into slip
+            /// forces (and the slider springs); default: backbone tangent at 0.
+            #[serde(default)]
+            k_ref: Option<f64>,
+            /// The cells.
+            cells: Vec<IwanCellToml>,
+        },
+        /// Hysteretic relaxation with a turning-point stack (eqs 1.27-1.29,
+        /// 1.41-1.42).
+        TurningPoints {
+            /// "sts" (continuous STS, needs `c` and `k1`) or "table" (measured
+            /// K_f, needs `d` and `k`).
+            law: String,
+            /// STS constant C in N²/mm.
+            #[serde(default)]
+            c: Option<f64>,
+            /// STS stiffness at a turning point K_1 in N/mm.
+            #[serde(default)]
+            k1: Option<f64>,
+            /// Table: distances from the turning point in mm.
+            #[serde(default)]
+            d: Option<Vec<f64>>,
+            /// Table: K_f in N/mm, non-increasing.
+            #[serde(default)]
+            k: Option<Vec<f64>>,
+            /// "masing" (default) or "ignored".
+            #[serde(default = "default_first_loading")]
+            first_loading: String,
+        },
+        /// A bank of nonlinear viscous x_f cells (eq 1.52).
+        Xf {
+            /// "midpoint" (eq 2.41) or "exact-ramp".
+            form: String,
+            /// The cells.
+            cells: Vec<XfCellToml>,
+        },
+        /// Dahl's friction cell (eq 1.43).
+        Dahl(DahlParams),
+        /// The Bouc-Wen cell (eq 1.44, the thesis's naming).
+        BoucWen(BoucWenParams),
+        /// Berg's friction cell (eq 1.45).
+        Berg(BergParams),
+    }
 }
 
 /// Parameters of a Dahl cell.
@@ -252,137 +296,138 @@ pub struct CellSpec {
     pub g: f64,
 }
 
-/// `[profile]`: the imposed displacement x(t) in mm. The formulas, the
-/// defaults and the bounds of each profile are in [`crate::profile`] and
-/// `docs/scenes.md`.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum ProfileSpec {
-    /// x = preload + amplitude sin(2π f t).
-    Sine {
-        /// Amplitude in mm.
-        amplitude: f64,
-        /// Frequency in Hz.
-        frequency_hz: f64,
-        /// Number of cycles.
-        cycles: f64,
-        /// Static offset in mm.
-        #[serde(default)]
-        preload: f64,
-    },
-    /// Triangle between preload ± amplitude at constant speed, starting
-    /// upward from the preload.
-    Triangle {
-        /// Amplitude in mm.
-        amplitude: f64,
-        /// Speed in mm/s.
-        speed: f64,
-        /// Number of cycles.
-        cycles: f64,
-        /// Static offset in mm.
-        #[serde(default)]
-        preload: f64,
-    },
-    /// Multi-step relaxation (seed 000 §3.2.3, Table B.2): from `preload`,
-    /// a linear ramp of `ramp_s` to each level in turn, each held `hold_s`.
-    MultiStep {
-        /// Levels in mm, in the order they are reached.
-        levels: Vec<f64>,
-        /// Duration of each ramp in s (> 0; the thesis uses 20 s).
-        ramp_s: f64,
-        /// Hold at each level in s (>= 0; the thesis uses 360 s or 3600 s).
-        hold_s: f64,
-        /// Starting level in mm (the bushing starts relaxed there).
-        #[serde(default)]
-        preload: f64,
-    },
-    /// Stepped sines (seed 000 Fig. 3.3, Table B.2): at each preload, for
-    /// each frequency, a step of whole `cycles` at each amplitude in turn,
-    /// each step starting and ending at the preload with zero phase.
-    SteppedSine {
-        /// A single preload in mm (default 0); not with `preloads`.
-        #[serde(default)]
-        preload: Option<f64>,
-        /// Several preloads in mm, visited in order; not with `preload`.
-        #[serde(default)]
-        preloads: Option<Vec<f64>>,
-        /// Frequencies in Hz, outer loop at each preload.
-        frequencies_hz: Vec<f64>,
-        /// Amplitudes in mm, inner loop.
-        amplitudes: Vec<f64>,
-        /// Whole number of cycles per step.
-        cycles: f64,
-        /// Rest at the preload after each step, in s; not with
-        /// `settle_cycles`.
-        #[serde(default)]
-        settle_s: Option<f64>,
-        /// Rest at the preload after each step, in periods of that step's
-        /// frequency; not with `settle_s`.
-        #[serde(default)]
-        settle_cycles: Option<f64>,
-        /// Ramp between preloads in s (needed with two or more preloads).
-        #[serde(default)]
-        ramp_s: Option<f64>,
-        /// Hold after each preload change in s (default 0).
-        #[serde(default)]
-        hold_s: Option<f64>,
-    },
-    /// Sine sweep, phase-continuous: x = preload + amplitude sin(φ(t)) with
-    /// φ the integral of 2π f(t), f linear or logarithmic in time from
-    /// `f_start_hz` to `f_end_hz` over `duration_s`.
-    Sweep {
-        /// Amplitude in mm.
-        amplitude: f64,
-        /// Frequency at t = 0 in Hz.
-        f_start_hz: f64,
-        /// Frequency at t = duration_s in Hz.
-        f_end_hz: f64,
-        /// Duration in s.
-        duration_s: f64,
-        /// Frequency law: "log" (default) or "linear".
-        #[serde(default)]
-        spacing: crate::profile::Spacing,
-        /// Static offset in mm.
-        #[serde(default)]
-        preload: f64,
-    },
-    /// Stop/start transient, a displacement proxy of seed 000 §5.2.4: each
-    /// event is the response of one mode (`frequency_hz`, `damping`) to a
-    /// load ramped over `rise_s` whose static displacement is the event's
-    /// `size`.
-    StopStart {
-        /// Frequency of the mode that rings, in Hz (undamped).
-        frequency_hz: f64,
-        /// Damping ratio ζ in [0, 1).
-        damping: f64,
-        /// Rise time of each load change in s (0 for a step).
-        rise_s: f64,
-        /// Duration in s.
-        duration_s: f64,
-        /// The events, in time order.
-        events: Vec<crate::profile::StopStartEvent>,
-        /// Static offset in mm before the first event.
-        #[serde(default)]
-        preload: f64,
-    },
-    /// Replay of a measured displacement from a CSV file, linearly
-    /// interpolated onto the scene's step.
-    Replay {
-        /// CSV file, relative to the scene file's directory.
-        file: String,
-        /// Displacement column: a header name or a 1-based index.
-        column: crate::profile::Column,
-        /// Time column in s (name or 1-based index); not with `rate_hz`.
-        #[serde(default)]
-        time_column: Option<crate::profile::Column>,
-        /// Sampling rate of the file in Hz; not with `time_column`.
-        #[serde(default)]
-        rate_hz: Option<f64>,
-        /// The samples (time from the first sample in s, displacement in
-        /// mm), read from `file` when the scene is loaded.
-        #[serde(skip)]
-        samples: Vec<(f64, f64)>,
-    },
+tagged_table! {
+    /// `[profile]`: the imposed displacement x(t) in mm. The formulas, the
+    /// defaults and the bounds of each profile are in [`crate::profile`] and
+    /// `docs/scenes.md`.
+    #[derive(Debug, Clone, PartialEq, Deserialize)]
+    pub enum ProfileSpec, read by tag as ProfileByTag("ProfileSpec") {
+        /// x = preload + amplitude sin(2π f t).
+        Sine {
+            /// Amplitude in mm.
+            amplitude: f64,
+            /// Frequency in Hz.
+            frequency_hz: f64,
+            /// Number of cycles.
+            cycles: f64,
+            /// Static offset in mm.
+            #[serde(default)]
+            preload: f64,
+        },
+        /// Triangle between preload ± amplitude at constant speed, starting
+        /// upward from the preload.
+        Triangle {
+            /// Amplitude in mm.
+            amplitude: f64,
+            /// Speed in mm/s.
+            speed: f64,
+            /// Number of cycles.
+            cycles: f64,
+            /// Static offset in mm.
+            #[serde(default)]
+            preload: f64,
+        },
+        /// Multi-step relaxation (seed 000 §3.2.3, Table B.2): from `preload`,
+        /// a linear ramp of `ramp_s` to each level in turn, each held `hold_s`.
+        MultiStep {
+            /// Levels in mm, in the order they are reached.
+            levels: Vec<f64>,
+            /// Duration of each ramp in s (> 0; the thesis uses 20 s).
+            ramp_s: f64,
+            /// Hold at each level in s (>= 0; the thesis uses 360 s or 3600 s).
+            hold_s: f64,
+            /// Starting level in mm (the bushing starts relaxed there).
+            #[serde(default)]
+            preload: f64,
+        },
+        /// Stepped sines (seed 000 Fig. 3.3, Table B.2): at each preload, for
+        /// each frequency, a step of whole `cycles` at each amplitude in turn,
+        /// each step starting and ending at the preload with zero phase.
+        SteppedSine {
+            /// A single preload in mm (default 0); not with `preloads`.
+            #[serde(default)]
+            preload: Option<f64>,
+            /// Several preloads in mm, visited in order; not with `preload`.
+            #[serde(default)]
+            preloads: Option<Vec<f64>>,
+            /// Frequencies in Hz, outer loop at each preload.
+            frequencies_hz: Vec<f64>,
+            /// Amplitudes in mm, inner loop.
+            amplitudes: Vec<f64>,
+            /// Whole number of cycles per step.
+            cycles: f64,
+            /// Rest at the preload after each step, in s; not with
+            /// `settle_cycles`.
+            #[serde(default)]
+            settle_s: Option<f64>,
+            /// Rest at the preload after each step, in periods of that step's
+            /// frequency; not with `settle_s`.
+            #[serde(default)]
+            settle_cycles: Option<f64>,
+            /// Ramp between preloads in s (needed with two or more preloads).
+            #[serde(default)]
+            ramp_s: Option<f64>,
+            /// Hold after each preload change in s (default 0).
+            #[serde(default)]
+            hold_s: Option<f64>,
+        },
+        /// Sine sweep, phase-continuous: x = preload + amplitude sin(φ(t)) with
+        /// φ the integral of 2π f(t), f linear or logarithmic in time from
+        /// `f_start_hz` to `f_end_hz` over `duration_s`.
+        Sweep {
+            /// Amplitude in mm.
+            amplitude: f64,
+            /// Frequency at t = 0 in Hz.
+            f_start_hz: f64,
+            /// Frequency at t = duration_s in Hz.
+            f_end_hz: f64,
+            /// Duration in s.
+            duration_s: f64,
+            /// Frequency law: "log" (default) or "linear".
+            #[serde(default)]
+            spacing: crate::profile::Spacing,
+            /// Static offset in mm.
+            #[serde(default)]
+            preload: f64,
+        },
+        /// Stop/start transient, a displacement proxy of seed 000 §5.2.4: each
+        /// event is the response of one mode (`frequency_hz`, `damping`) to a
+        /// load ramped over `rise_s` whose static displacement is the event's
+        /// `size`.
+        StopStart {
+            /// Frequency of the mode that rings, in Hz (undamped).
+            frequency_hz: f64,
+            /// Damping ratio ζ in [0, 1).
+            damping: f64,
+            /// Rise time of each load change in s (0 for a step).
+            rise_s: f64,
+            /// Duration in s.
+            duration_s: f64,
+            /// The events, in time order.
+            events: Vec<crate::profile::StopStartEvent>,
+            /// Static offset in mm before the first event.
+            #[serde(default)]
+            preload: f64,
+        },
+        /// Replay of a measured displacement from a CSV file, linearly
+        /// interpolated onto the scene's step.
+        Replay {
+            /// CSV file, relative to the scene file's directory.
+            file: String,
+            /// Displacement column: a header name or a 1-based index.
+            column: crate::profile::Column,
+            /// Time column in s (name or 1-based index); not with `rate_hz`.
+            #[serde(default)]
+            time_column: Option<crate::profile::Column>,
+            /// Sampling rate of the file in Hz; not with `time_column`.
+            #[serde(default)]
+            rate_hz: Option<f64>,
+            /// The samples (time from the first sample in s, displacement in
+            /// mm), read from `file` when the scene is loaded.
+            #[serde(skip)]
+            samples: Vec<(f64, f64)>,
+        },
+    }
 }
 
 /// Where in a file something went wrong: 1-based line and column.
@@ -443,6 +488,8 @@ pub struct Scene {
     pub effects: Vec<Effect>,
     /// Profile.
     pub profile: ProfileSpec,
+    /// Steps between two rows of `trace.csv` (1: every step).
+    pub trace_every: u64,
 }
 
 /// A validated effect.
@@ -586,8 +633,10 @@ impl Scene {
             at: span.map(|s| Location::of(text, s.start)),
             message,
         };
-        let raw: SceneFile =
-            toml::from_str(text).map_err(|e| err(e.span(), e.message().trim().to_string()))?;
+        let raw: SceneFile = toml::from_str(text).map_err(|e| {
+            let (span, message) = shape_error(text, &e);
+            err(span, message)
+        })?;
 
         let run_span = raw.run.span();
         let run = raw.run.into_inner();
@@ -642,6 +691,22 @@ impl Scene {
                 format!("profile: {steps} steps, more than the limit of {MAX_STEPS}"),
             ));
         }
+        let trace_every = match raw.output {
+            None => 1,
+            Some(o) => {
+                let span = o.span();
+                let every = o.into_inner().trace_every;
+                u64::try_from(every)
+                    .ok()
+                    .filter(|&n| n >= 1)
+                    .ok_or_else(|| {
+                        err(
+                            Some(span),
+                            format!("output.trace_every must be a whole number >= 1, got {every}"),
+                        )
+                    })?
+            }
+        };
         Ok(Self {
             title: raw.title,
             dt,
@@ -649,6 +714,7 @@ impl Scene {
             backbone,
             effects,
             profile,
+            trace_every,
         })
     }
 
@@ -798,6 +864,312 @@ fn check_count(n: usize) -> Result<(), String> {
         Ok(())
     }
 }
+/// The place and the message of a TOML or shape error (a missing key, a
+/// value of the wrong type), as precise as the document allows: a mistake
+/// inside a tagged table (`[backbone]`, `[[effects]]`, `[profile]`) is found
+/// again by reading the table as its variant ([`tagged_mistake`]), and the
+/// message starts with where it is (`effects[0] (maxwell): cells[1].g: `).
+fn shape_error(text: &str, e: &toml::de::Error) -> (Option<Range<usize>>, String) {
+    let message = e.message().trim().to_string();
+    let Some(mut span) = e.span() else {
+        return (None, message);
+    };
+    // A syntax error: the parser's own place and message.
+    let Ok(doc) = DeTable::parse(text) else {
+        return (Some(span), message);
+    };
+    let doc = doc.into_inner();
+    if let Some(at) = tagged_mistake(&doc, &span, &message) {
+        span = at;
+    }
+    let mut path = Vec::new();
+    let mut best = None;
+    find_value(&doc, &span, &mut path, &mut best);
+    let Some((path, value)) = best else {
+        return (Some(span), message);
+    };
+    let Some(value) = value else {
+        // A key (an unknown one): name the table it is in.
+        let table = path.split_last().map_or(&[][..], |(_, t)| t);
+        return (Some(span), format!("{}{message}", prefix(&doc, table)));
+    };
+    let opens = |s: &str| text.get(span.start..).is_some_and(|t| t.starts_with(s));
+    let (path, message) = match (value, &path[..]) {
+        // `[effects]` for `[[effects]]`, `cells = { … }` for `cells = [{ … }]`.
+        (DeValue::Table(_), _) if message.starts_with("invalid type: map, expected a sequence") => {
+            let name = dotted(&path);
+            let message = if opens("[") {
+                format!(
+                    "a single table `[{name}]` where an array of tables is expected: \
+                     write `[[{name}]]` above each entry"
+                )
+            } else {
+                "a table where an array is expected: write `[{ … }, { … }]`".to_string()
+            };
+            (&path[..], message)
+        }
+        // `[[backbone]]` for `[backbone]`: serde reads the table's fields
+        // from the array's entries, the first of which is a whole table.
+        (DeValue::Table(_), [table @ Step::Key(name), Step::Index(0)])
+            if opens("[[") && message.starts_with("invalid type: map") =>
+        {
+            let message = format!(
+                "`[[{name}]]` starts an array of tables where a single table is expected: \
+                 write `[{name}]`"
+            );
+            (std::slice::from_ref(table), message)
+        }
+        _ => (&path[..], message),
+    };
+    (Some(span), format!("{}{message}", prefix(&doc, path)))
+}
+
+/// Where the mistake is when an error points at a tagged table (or at the
+/// `[[effects]]` array, as errors inside its entries do): the first such
+/// table that does not read as its variant, at the value the variant names
+/// (at the table itself for unknown keys and names, whose message lists
+/// what the table takes). `None` to leave the error where it is.
+fn tagged_mistake(doc: &DeTable<'_>, span: &Range<usize>, message: &str) -> Option<Range<usize>> {
+    // Errors inside an `[[effects]]` entry point at the array, whose span
+    // is that of its first entry.
+    let in_effects = doc.get("effects").is_some_and(|e| e.span() == *span);
+    let candidates = tagged_tables(doc)
+        .into_iter()
+        .filter(|(table, _, entry)| table.span() == *span || (*entry && in_effects));
+    for (table, read, _) in candidates {
+        let Some(tag) = tag_of(table) else {
+            // No string `type` (or not a table): serde stops here too.
+            return Some(table.span());
+        };
+        let Err(again) = read(by_tag(table, tag)) else {
+            continue;
+        };
+        // The same mistake, found where it is; otherwise leave it.
+        if again.message().trim() != message {
+            return None;
+        }
+        let unknown =
+            message.starts_with("unknown field") || message.starts_with("unknown variant");
+        return Some(match again.span() {
+            Some(at) if !unknown => at,
+            _ => table.span(),
+        });
+    }
+    None
+}
+
+/// Reads one tagged table's content as the variant its `type` names.
+type ReadByTag = for<'i> fn(ByTag<'i>) -> Result<(), toml::de::Error>;
+
+/// The tagged tables of a scene document in the order serde reads them,
+/// each with its variant reader and whether it is an `[[effects]]` entry.
+fn tagged_tables<'a, 'i>(doc: &'a DeTable<'i>) -> Vec<(&'a Spanned<DeValue<'i>>, ReadByTag, bool)> {
+    let mut tables: Vec<(&Spanned<DeValue<'i>>, ReadByTag, bool)> = Vec::new();
+    if let Some(t) = doc.get("backbone") {
+        tables.push((t, |d| BackboneByTag::deserialize(d).map(drop), false));
+    }
+    if let Some(DeValue::Array(effects)) = doc.get("effects").map(Spanned::get_ref) {
+        for t in effects.iter() {
+            tables.push((t, |d| EffectByTag::deserialize(d).map(drop), true));
+        }
+    }
+    if let Some(t) = doc.get("profile") {
+        tables.push((t, |d| ProfileByTag::deserialize(d).map(drop), false));
+    }
+    tables
+}
+
+/// The `type` of a tagged table, if it is a table with a string `type`.
+fn tag_of<'a>(table: &'a Spanned<DeValue<'_>>) -> Option<&'a str> {
+    table.get_ref().get("type")?.get_ref().as_str()
+}
+
+/// A tagged table's content, without its `type`, as variant `tag`.
+fn by_tag<'i>(table: &Spanned<DeValue<'i>>, tag: &str) -> ByTag<'i> {
+    let mut content = match table.get_ref() {
+        DeValue::Table(t) => t.clone(),
+        _ => DeTable::new(),
+    };
+    content.remove("type");
+    ByTag {
+        tag: tag.to_string(),
+        content: Spanned::new(table.span(), DeValue::Table(content)),
+    }
+}
+
+/// A tagged table's content (its keys but `type`) presented as variant
+/// `tag` of an externally tagged enum.
+struct ByTag<'i> {
+    tag: String,
+    content: Spanned<DeValue<'i>>,
+}
+
+impl<'de> de::Deserializer<'de> for ByTag<'de> {
+    type Error = toml::de::Error;
+
+    fn deserialize_any<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, Self::Error> {
+        visitor.visit_enum(self)
+    }
+
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string
+        bytes byte_buf option unit unit_struct newtype_struct seq tuple
+        tuple_struct map struct enum identifier ignored_any
+    }
+}
+
+impl<'de> de::EnumAccess<'de> for ByTag<'de> {
+    type Error = toml::de::Error;
+    type Variant = VariantContent<'de>;
+
+    fn variant_seed<V: DeserializeSeed<'de>>(
+        self,
+        seed: V,
+    ) -> Result<(V::Value, Self::Variant), Self::Error> {
+        let tag = de::value::StringDeserializer::<toml::de::Error>::new(self.tag);
+        Ok((seed.deserialize(tag)?, VariantContent(self.content)))
+    }
+}
+
+/// The content of a variant read by [`ByTag`].
+struct VariantContent<'i>(Spanned<DeValue<'i>>);
+
+impl<'de> de::VariantAccess<'de> for VariantContent<'de> {
+    type Error = toml::de::Error;
+
+    fn unit_variant(self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+
+    fn newtype_variant_seed<T: DeserializeSeed<'de>>(
+        self,
+        seed: T,
+    ) -> Result<T::Value, Self::Error> {
+        seed.deserialize(ValueDeserializer::from(self.0))
+    }
+
+    fn tuple_variant<V: Visitor<'de>>(
+        self,
+        _len: usize,
+        visitor: V,
+    ) -> Result<V::Value, Self::Error> {
+        de::Deserializer::deserialize_seq(ValueDeserializer::from(self.0), visitor)
+    }
+
+    fn struct_variant<V: Visitor<'de>>(
+        self,
+        fields: &'static [&'static str],
+        visitor: V,
+    ) -> Result<V::Value, Self::Error> {
+        de::Deserializer::deserialize_struct(ValueDeserializer::from(self.0), "", fields, visitor)
+    }
+}
+
+/// One step of the way to a value: a key of a table or an index of an
+/// array.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Step<'a> {
+    Key(&'a str),
+    Index(usize),
+}
+
+/// Deepest nesting [`find_value`] looks into (a scene nests four deep).
+const MAX_DEPTH: usize = 32;
+
+/// The deepest value (or key, with `None`) of a document whose span is
+/// some span, and the way to it.
+type Found<'a, 'i> = Option<(Vec<Step<'a>>, Option<&'a DeValue<'i>>)>;
+
+/// Looks through `table` (at `path`) for the deepest value or key whose
+/// span is `span`, into `best`.
+fn find_value<'a, 'i>(
+    table: &'a DeTable<'i>,
+    span: &Range<usize>,
+    path: &mut Vec<Step<'a>>,
+    best: &mut Found<'a, 'i>,
+) {
+    for (key, value) in table.iter() {
+        path.push(Step::Key(key.get_ref()));
+        if key.span() == *span && best.as_ref().is_none_or(|(p, _)| p.len() < path.len()) {
+            *best = Some((path.clone(), None));
+        }
+        visit_value(value, span, path, best);
+        path.pop();
+    }
+}
+
+fn visit_value<'a, 'i>(
+    value: &'a Spanned<DeValue<'i>>,
+    span: &Range<usize>,
+    path: &mut Vec<Step<'a>>,
+    best: &mut Found<'a, 'i>,
+) {
+    if value.span() == *span && best.as_ref().is_none_or(|(p, _)| p.len() < path.len()) {
+        *best = Some((path.clone(), Some(value.get_ref())));
+    }
+    if path.len() >= MAX_DEPTH {
+        return;
+    }
+    match value.get_ref() {
+        DeValue::Table(t) => find_value(t, span, path, best),
+        DeValue::Array(a) => {
+            for (i, v) in a.iter().enumerate() {
+                path.push(Step::Index(i));
+                visit_value(v, span, path, best);
+                path.pop();
+            }
+        }
+        _ => {}
+    }
+}
+
+/// `cells[1].g` for the way `cells`, 1, `g`.
+fn dotted(path: &[Step<'_>]) -> String {
+    let mut s = String::new();
+    for step in path {
+        match step {
+            Step::Key(k) if s.is_empty() => s.push_str(k),
+            Step::Key(k) => {
+                s.push('.');
+                s.push_str(k);
+            }
+            Step::Index(i) => s.push_str(&format!("[{i}]")),
+        }
+    }
+    s
+}
+
+/// What an error message at `path` starts with: the section as the
+/// parameter checks name it (`backbone: `, `profile: `,
+/// `effects[0] (maxwell): `), then the key inside it (`cells[1].g: `);
+/// outside those sections the dotted key (`run.rate_hz: `).
+fn prefix(doc: &DeTable<'_>, path: &[Step<'_>]) -> String {
+    let (section, rest) = match path {
+        [] => return String::new(),
+        [Step::Key("effects"), Step::Index(i), rest @ ..] => {
+            let kind = doc
+                .get("effects")
+                .and_then(|e| e.get_ref().get(*i))
+                .and_then(|e| e.get_ref().get("type"))
+                .and_then(|t| t.get_ref().as_str());
+            match kind {
+                // Not when the kind itself is the mistake.
+                Some(kind) if rest != [Step::Key("type")] => {
+                    (format!("effects[{i}] ({kind})"), rest)
+                }
+                _ => (format!("effects[{i}]"), rest),
+            }
+        }
+        [Step::Key(k @ ("backbone" | "profile")), rest @ ..] => ((*k).to_string(), rest),
+        _ => return format!("{}: ", dotted(path)),
+    };
+    if rest.is_empty() {
+        format!("{section}: ")
+    } else {
+        format!("{section}: {}: ", dotted(rest))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -868,12 +1240,13 @@ cycles = 3
         let e = Scene::parse("s.toml", &bad).unwrap_err();
         assert!(e.message.contains("omega*dt = 1.25"), "{e}");
         let bad = GOOD.replace("g = 0.2", "g = 1.5");
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
         assert!(
-            Scene::parse("s.toml", &bad)
-                .unwrap_err()
-                .message
-                .contains("above 1")
+            e.message
+                .contains("effects[0] (maxwell): cells[0].g = 1.5 must be in (0, 1]"),
+            "{e}"
         );
+        assert_eq!(e.at.map(|l| l.line), Some(10), "{e}");
         let bad = GOOD.replace(
             "coefficients = [0.0, 100.0]",
             "coefficients = [0.0, -100.0]",
@@ -1018,6 +1391,147 @@ cycles = 3
                 .message
                 .contains("not one of masing, ignored")
         );
+    }
+
+    /// Line and column of an error.
+    fn at(e: &SceneError) -> (usize, usize) {
+        e.at.map_or((0, 0), |l| (l.line, l.column))
+    }
+
+    #[test]
+    fn wrong_values_in_tagged_tables_point_at_the_value_and_name_the_key() {
+        // [[effects]]: a newtype variant, a struct variant's cell, an
+        // optional parameter.
+        let friction = GOOD.replace(
+            "[profile]",
+            "[[effects]]\ntype = \"dahl\"\nk_d = 200.0\nf_f = \"10 N\"\n[profile]",
+        );
+        let e = Scene::parse("s.toml", &friction).unwrap_err();
+        assert_eq!(
+            e.message,
+            "effects[1] (dahl): f_f: invalid type: string \"10 N\", expected f64"
+        );
+        assert_eq!(at(&e), (17, 7), "{e}");
+        let cell = GOOD.replace("g = 0.2", "g = \"0.2\"");
+        let e = Scene::parse("s.toml", &cell).unwrap_err();
+        assert!(
+            e.message
+                .starts_with("effects[0] (maxwell): cells[0].g: invalid type: string"),
+            "{e}"
+        );
+        assert_eq!(at(&e), (13, 28), "{e}");
+        let iwan = GOOD.replace(
+            "[profile]",
+            "[[effects]]\ntype = \"iwan\"\nform = \"clamp\"\ncells = [{ g = 0.1, x_f = true }]\n[profile]",
+        );
+        let e = Scene::parse("s.toml", &iwan).unwrap_err();
+        assert!(
+            e.message.starts_with(
+                "effects[1] (iwan): cells[0].x_f: invalid type: boolean `true`, expected f64"
+            ),
+            "{e}"
+        );
+        assert_eq!(at(&e), (17, 27), "{e}");
+        // A missing key of a cell points at the cell.
+        let e = Scene::parse("s.toml", &GOOD.replace("f_hz = 1.0, ", "")).unwrap_err();
+        assert_eq!(
+            e.message,
+            "effects[0] (maxwell): cells[0]: missing field `f_hz`"
+        );
+        assert_eq!(at(&e), (13, 10), "{e}");
+        // [backbone] and [profile].
+        let e = Scene::parse("s.toml", &GOOD.replace("100.0]", "\"100\"]")).unwrap_err();
+        assert!(
+            e.message
+                .starts_with("backbone: coefficients[1]: invalid type: string"),
+            "{e}"
+        );
+        assert_eq!(at(&e), (8, 22), "{e}");
+        let e = Scene::parse("s.toml", &GOOD.replace("cycles = 3", "cycles = [3]")).unwrap_err();
+        assert!(
+            e.message
+                .starts_with("profile: cycles: invalid type: sequence, expected f64"),
+            "{e}"
+        );
+        assert_eq!(at(&e), (18, 10), "{e}");
+        // Outside the tagged tables the key is named too.
+        let e = Scene::parse("s.toml", &GOOD.replace("1000", "\"1 kHz\"")).unwrap_err();
+        assert!(
+            e.message.starts_with("run.rate_hz: invalid type: string"),
+            "{e}"
+        );
+        assert_eq!(at(&e), (4, 11), "{e}");
+    }
+
+    #[test]
+    fn unknown_keys_in_tagged_tables_stay_at_their_table() {
+        // In the second [[effects]] table (serde points at the first).
+        let bad = GOOD.replace(
+            "[profile]",
+            "[[effects]]\ntype = \"berg\"\nf_max = 12.0\nx2 = 0.05\nmu = 0.3\n[profile]",
+        );
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
+        assert_eq!(
+            e.message,
+            "effects[1] (berg): unknown field `mu`, expected `f_max` or `x2`"
+        );
+        assert_eq!(at(&e), (14, 1), "{e}");
+        let bad = GOOD.replace("cycles = 3", "cycles = 3\nphase = 0.5");
+        let e = Scene::parse("s.toml", &bad).unwrap_err();
+        assert!(
+            e.message.starts_with("profile: unknown field `phase`"),
+            "{e}"
+        );
+        assert_eq!(at(&e), (14, 1), "{e}");
+    }
+
+    #[test]
+    fn tables_and_arrays_of_tables_written_for_each_other_are_named() {
+        let e = Scene::parse("s.toml", &GOOD.replace("[[effects]]", "[effects]")).unwrap_err();
+        assert!(
+            e.message.starts_with(
+                "effects: a single table `[effects]` where an array of tables is expected: \
+                 write `[[effects]]`"
+            ),
+            "{e}"
+        );
+        assert_eq!(at(&e), (10, 1), "{e}");
+        let e = Scene::parse("s.toml", &GOOD.replace("[run]", "[[run]]")).unwrap_err();
+        assert_eq!(
+            e.message,
+            "run: `[[run]]` starts an array of tables where a single table is expected: \
+             write `[run]`"
+        );
+        assert_eq!(at(&e), (3, 1), "{e}");
+        let inline = GOOD.replace(
+            "cells = [{ f_hz = 1.0, g = 0.2 }]",
+            "cells = { f_hz = 1.0, g = 0.2 }",
+        );
+        let e = Scene::parse("s.toml", &inline).unwrap_err();
+        assert!(
+            e.message
+                .starts_with("effects[0] (maxwell): cells: a table where an array is expected"),
+            "{e}"
+        );
+        assert_eq!(at(&e), (13, 9), "{e}");
+    }
+
+    #[test]
+    fn shape_errors_of_odd_documents_do_not_panic() {
+        for text in [
+            "",
+            "effects = 3",
+            "effects = [1, \"x\"]\n[run]\nrate_hz = 1",
+            "[[effects]]\ntype = 3",
+            "[[effects]]\n[[effects]]\ntype = \"dahl\"\nk_d = \"\"",
+            "backbone = \"spline\"",
+            "[[backbone]]\n[[backbone]]",
+            "[profile]\ntype = \"stop-start\"\n[[profile.events]]\nat_s = \"0\"",
+            "a.b.c.d.e.f = [[[[[[1]]]]]]",
+        ] {
+            let e = Scene::parse("s.toml", text).unwrap_err();
+            assert!(!e.message.is_empty(), "{text:?}");
+        }
     }
 
     #[test]

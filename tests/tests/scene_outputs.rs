@@ -5,6 +5,8 @@
 //! `validate` lines of a Maxwell and an Iwan scene, and the `cost` report
 //! (its parts and arithmetic only: no timing is asserted).
 
+mod common;
+use common::{root, scene_files};
 use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
 
@@ -12,10 +14,6 @@ use bushing::{MaxwellBank, MaxwellSpec};
 use bushing_sim::scene::Effect;
 use bushing_sim::validate::{self, Outcome};
 use bushing_sim::{Scene, cost, run, svg};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 fn out_dir(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("bushing-outputs-{name}-{}", std::process::id()))
@@ -119,22 +117,20 @@ fn quickstart_plots_are_well_formed_with_units() {
     std::fs::remove_dir_all(out).ok();
 }
 
-/// Every scene of `scenes/` runs and writes well-formed plots with units;
-/// the modulus plot exactly when the profile imposes a sine somewhere.
+/// Every scene of `scenes/` (and its subdirectories) runs without a
+/// refused step and writes well-formed plots with units; the modulus plot
+/// exactly when the profile imposes a sine somewhere.
 #[test]
 fn every_scene_writes_well_formed_plots() {
-    let mut names: Vec<PathBuf> = std::fs::read_dir(root().join("scenes"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-        .collect();
-    names.sort();
-    assert!(names.len() >= 5);
+    let names = scene_files();
+    assert!(names.len() >= 30, "{} scenes", names.len());
     for path in names {
         let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
         let stem = path.file_stem().unwrap().to_string_lossy().to_string();
         let out = out_dir(&format!("all-{stem}"));
-        run::run(&scene, &out).unwrap_or_else(|e| panic!("{stem}: {e}"));
+        let summary = run::run(&scene, &out).unwrap_or_else(|e| panic!("{stem}: {e}"));
+        assert_eq!(summary.refused, 0, "{stem}");
+        assert!(summary.steps > 0, "{stem}");
         let sine = (1..=scene.steps()).any(|i| {
             bushing_sim::profile::frequency_at(&scene.profile, i as f64 * scene.dt).is_some()
         });
@@ -454,4 +450,38 @@ fn every_trace_row_has_that_steps_effect_forces() {
             );
         }
     }
+}
+
+#[test]
+fn trace_every_keeps_every_nth_row_and_the_last() {
+    let text = std::fs::read_to_string(root().join("scenes/maxwell4.toml")).unwrap();
+    let full = Scene::parse("maxwell4.toml", &text).unwrap();
+    let sparse = Scene::parse(
+        "maxwell4.toml",
+        &format!("{text}\n[output]\ntrace_every = 7\n"),
+    )
+    .unwrap();
+    assert_eq!((full.trace_every, sparse.trace_every), (1, 7));
+    let read = |scene: &Scene, name: &str| {
+        let out = out_dir(name);
+        let summary = run::run(scene, &out).unwrap();
+        let csv = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+        std::fs::remove_dir_all(&out).ok();
+        let rows: Vec<String> = csv.lines().skip(1).map(String::from).collect();
+        (summary, rows)
+    };
+    let (a, all) = read(&full, "every-1");
+    let (b, kept) = read(&sparse, "every-7");
+    let steps = full.steps() as usize;
+    assert_eq!(all.len(), steps);
+    // Rows 7, 14, ... and the last step (8000 is not a multiple of 7).
+    assert_eq!(steps % 7, 6);
+    assert_eq!(kept.len(), steps / 7 + 1);
+    for (j, row) in kept.iter().enumerate() {
+        let i = if j < steps / 7 { 7 * (j + 1) } else { steps };
+        assert_eq!(row, &all[i - 1], "kept row {j} is step {i}");
+    }
+    // The energies and plots still see every step.
+    assert_eq!(a.dissipated_mj, b.dissipated_mj);
+    assert_eq!(a.modulus, b.modulus);
 }

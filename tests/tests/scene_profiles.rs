@@ -370,12 +370,18 @@ fn profile_errors_name_the_field_the_bound_and_the_csv_row() {
         here,
     );
     assert!(e.contains("hold"), "{e}");
-    let e = profile_error(
+    // A wrong type is located at the value itself (line 16, `column`).
+    let text = scene_text(
+        1000.0,
         "type = \"replay\"\nfile = \"x.csv\"\ncolumn = 1.5\nrate_hz = 100",
-        here,
     );
+    let e = Scene::parse_in("bad.toml", &text, here).unwrap_err();
+    assert_eq!(e.at.map(|l| (l.line, l.column)), Some((16, 10)), "{e}");
     assert!(
-        e.contains("a column name (string) or a 1-based column index"),
+        e.message
+            .starts_with("profile: column: invalid type: floating point `1.5`")
+            && e.message
+                .contains("a column name (string) or a 1-based column index"),
         "{e}"
     );
     // Samples come from the file only.

@@ -1,14 +1,11 @@
 //! A scene run end to end: the trace and plot files, and the trace equal,
 //! bit for bit, to the const-generic firmware kernel stepped directly.
 
-use std::path::PathBuf;
+mod common;
+use common::{root, scene_files};
 
 use bushing::{Bushing, Compensated, MaxwellBank, MaxwellForm, MaxwellSpec, Polynomial};
 use bushing_sim::{Scene, run};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 #[test]
 fn quickstart_scene_writes_trace_and_plot_equal_to_the_firmware_kernel() {
@@ -184,40 +181,6 @@ fn committed_xf_table_is_current() {
 /// Every scene in `scenes/` loads and runs as the README runs it (`run
 /// SCENE --out DIR`), refuses no step, and every plot it writes is
 /// well-formed SVG whose axes carry a unit in brackets.
-#[test]
-fn every_scene_in_scenes_runs_and_plots() {
-    let mut files: Vec<PathBuf> = std::fs::read_dir(root().join("scenes"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
-        .collect();
-    files.sort();
-    assert!(files.len() >= 10, "{} scenes", files.len());
-    for file in files {
-        let scene = Scene::load(&file).unwrap_or_else(|e| panic!("{e}"));
-        let name = file.file_stem().unwrap().to_string_lossy().to_string();
-        let out = std::env::temp_dir().join(format!("bushing-all-{}-{name}", std::process::id()));
-        let summary = run::run(&scene, &out).unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert_eq!(summary.refused, 0, "{name}");
-        assert!(summary.steps > 0, "{name}");
-        let mut plots = 0;
-        for entry in std::fs::read_dir(&out).unwrap() {
-            let path = entry.unwrap().path();
-            if path.extension().is_some_and(|e| e == "svg") {
-                let svg = std::fs::read_to_string(&path).unwrap();
-                if let Err(e) = bushing_sim::svg::well_formed(&svg) {
-                    panic!("{name}: {} is not well-formed: {e}", path.display());
-                }
-                let labelled = svg.matches(" [").count();
-                assert!(labelled >= 2, "{name}: {} lacks axis units", path.display());
-                plots += 1;
-            }
-        }
-        assert!(plots >= 3, "{name}: {plots} plots");
-        std::fs::remove_dir_all(out).ok();
-    }
-}
-
 /// Steps `scene` both ways: compiled (as `run` does) and as the general
 /// effect list, and demands the same rows and per-effect outputs, bit for
 /// bit.
@@ -278,11 +241,7 @@ fn compiled_equals_list<T: bushing::Real + 'static>(scene: &Scene) {
 #[test]
 fn every_scene_compiled_steps_bit_for_bit_as_the_effect_list() {
     let mut seen = 0;
-    for entry in std::fs::read_dir(root().join("scenes")).unwrap() {
-        let path = entry.unwrap().path();
-        if path.extension().is_none_or(|e| e != "toml") {
-            continue;
-        }
+    for path in scene_files() {
         let scene = Scene::load(&path).unwrap();
         compiled_equals_list::<f32>(&scene);
         compiled_equals_list::<f64>(&scene);
@@ -296,5 +255,5 @@ fn every_scene_compiled_steps_bit_for_bit_as_the_effect_list() {
         }
         seen += 1;
     }
-    assert!(seen >= 10, "{seen} scenes");
+    assert!(seen >= 30, "{seen} scenes");
 }
