@@ -202,6 +202,10 @@ impl<T: Real, S> BushingState<T, S> {
     pub fn force(&self) -> T {
         self.force
     }
+    /// Algorithmic tangent dF/dx of the last accepted step.
+    pub fn tangent(&self) -> T {
+        self.tangent
+    }
     /// Effects' states.
     pub fn effects(&self) -> &S {
         &self.effects

@@ -357,7 +357,7 @@ fn plan<T: Real + 'static>(scene: &Scene) -> Result<Plan<T>, String> {
         timers.push(compiled(scene, std::slice::from_ref(effect))?);
     }
     let mut comparisons = Vec::new();
-    if shape != Shape::List {
+    if shape == Shape::One {
         let list: SceneBushing<T> = model::build(scene).map_err(|e| e.to_string())?;
         comparisons.push((
             "the whole scene as an effect list (model::build)".to_string(),

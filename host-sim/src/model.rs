@@ -7,8 +7,8 @@ use bushing::maxwell::{self, MaxwellCell};
 use bushing::xf::{self, XfCell};
 use bushing::{
     Accumulator, Backbone, Berg, BoucWen, Bushing, BushingState, Compensated, Dahl, Drive, Effect,
-    EffectOutput, IwanCellSpec, KfTable, MaxwellForm, MaxwellSpec, MonotoneSpline, ParamError,
-    Plain, Polynomial, Real, Sts, TurningPoints, XfForm, XfSpec,
+    EffectOutput, IwanCellSpec, KfTable, MaxwellForm, MaxwellSpec, MonotoneSpline, Oscillator,
+    OscillatorState, ParamError, Plain, Polynomial, Real, Sts, TurningPoints, XfForm, XfSpec,
 };
 
 use crate::scene::{
@@ -464,6 +464,9 @@ pub fn effect_outputs<T: Real>(state: &SceneState<T>) -> Vec<EffectOutput<T>> {
 /// What the drivers read from one step of a [`SceneModel`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepRow<T> {
+    /// Displacement x_n: the input, or in an oscillator scene the mass's
+    /// displacement.
+    pub x: T,
     /// Total force F_n.
     pub force: T,
     /// Algorithmic tangent dF_n/dx_n.
@@ -512,6 +515,9 @@ pub enum Shape {
     One,
     /// Two or more: an [`EffectList`], one match per effect and step.
     List,
+    /// A unit mass on the bushing (its effects in an [`EffectList`]),
+    /// driven by a force.
+    Oscillator,
 }
 
 impl Shape {
@@ -521,6 +527,7 @@ impl Shape {
             Self::BackboneOnly => "backbone only",
             Self::One => "one effect, monomorphised",
             Self::List => "effect list",
+            Self::Oscillator => "oscillator, effect list",
         }
     }
 }
@@ -540,7 +547,8 @@ pub trait SceneModel<T: Real> {
     fn effect_count(&self) -> usize;
     /// Steps refused so far.
     fn refused(&self) -> u32;
-    /// Steps through `inputs`, appending one row per step to `rows` and
+    /// Steps through `inputs` (displacements, or forces in an oscillator
+    /// scene), appending one row per step to `rows` and
     /// [`SceneModel::effect_count`] outputs per step to `parts`.
     fn step_into(
         &mut self,
@@ -588,6 +596,7 @@ impl<T: Real, E: Parts<T>> SceneModel<T> for Compiled<T, E> {
         for &x in inputs {
             let o = self.bushing.step(&mut self.state, x);
             rows.push(StepRow {
+                x,
                 force: o.force,
                 tangent: o.tangent,
                 dissipated: o.dissipated,
@@ -650,6 +659,9 @@ fn compiled<T: Real + 'static, E: Parts<T> + 'static>(
 pub fn compile<T: Real + 'static>(scene: &Scene) -> Result<Box<dyn SceneModel<T>>, ParamError> {
     let x0 = T::from_f64(crate::profile::displacement(&scene.profile, 0.0));
     let list = build::<T>(scene)?;
+    if let Some(spec) = scene.oscillator {
+        return OscillatorModel::boxed(list, scene.dt, spec, x0);
+    }
     let backbone = list.backbone().clone();
     let mut effects = list.effects().effects().to_vec();
     match (effects.pop(), effects.is_empty()) {
@@ -660,5 +672,97 @@ pub fn compile<T: Real + 'static>(scene: &Scene) -> Result<Box<dyn SceneModel<T>
             let count = effects.len();
             compiled(backbone, EffectList { effects }, x0, Shape::List, count)
         }
+    }
+}
+
+/// A unit mass on a scene's bushing, `x'' + F(x) = f(t)`, integrated by the
+/// core's [`Oscillator`] (Newmark's average acceleration with a chord
+/// iteration); the inputs are the forces f.
+struct OscillatorModel<T: Real> {
+    oscillator: Oscillator<T, AnyBackbone<T>, EffectList<T>>,
+    state: OscillatorState<T, Vec<Slot<T>>>,
+    start: (T, T),
+    count: usize,
+    unconverged: u32,
+}
+
+impl<T: Real + 'static> OscillatorModel<T> {
+    fn boxed(
+        bushing: SceneBushing<T>,
+        dt: f64,
+        spec: crate::scene::OscillatorSpec,
+        f0: T,
+    ) -> Result<Box<dyn SceneModel<T>>, ParamError> {
+        let count = bushing.effects().effects().len();
+        let oscillator = Oscillator::new(bushing, dt)?;
+        let start = (T::from_f64(spec.p0), T::from_f64(spec.v0));
+        let state = oscillator.state_at(start.0, start.1, f0);
+        Ok(Box::new(Self {
+            oscillator,
+            state,
+            start,
+            count,
+            unconverged: 0,
+        }))
+    }
+}
+
+impl<T: Real> SceneModel<T> for OscillatorModel<T> {
+    fn shape(&self) -> Shape {
+        Shape::Oscillator
+    }
+    fn backbone(&self) -> &AnyBackbone<T> {
+        self.oscillator.restoring().backbone()
+    }
+    fn g0(&self) -> f64 {
+        self.oscillator.restoring().g0()
+    }
+    fn effect_count(&self) -> usize {
+        self.count
+    }
+    /// Steps refused by the restoring force, plus steps whose iteration
+    /// did not converge.
+    fn refused(&self) -> u32 {
+        self.state
+            .restoring()
+            .rejected()
+            .saturating_add(self.unconverged)
+    }
+    fn step_into(
+        &mut self,
+        inputs: &[T],
+        rows: &mut Vec<StepRow<T>>,
+        parts: &mut Vec<EffectOutput<T>>,
+    ) {
+        let g0 = T::from_f64(self.g0());
+        for &f in inputs {
+            let o = self.oscillator.step(&mut self.state, f);
+            if !o.converged {
+                self.unconverged = self.unconverged.saturating_add(1);
+            }
+            let restoring = self.state.restoring();
+            let (f_inf, _) = self.oscillator.restoring().backbone().eval(o.p);
+            rows.push(StepRow {
+                x: o.p,
+                force: o.force,
+                tangent: restoring.tangent(),
+                dissipated: o.dissipated,
+                elastic: g0 * f_inf,
+                refused: !o.converged,
+            });
+            EffectList::parts(restoring.effects(), &EffectOutput::zero(), parts);
+        }
+    }
+    /// Steps from the scene's initial displacement and velocity (the
+    /// start force is the first input); `x0` is not used.
+    fn time_steps(&self, inputs: &[T], _x0: T) -> std::time::Duration {
+        let f0 = inputs.first().copied().unwrap_or(T::ZERO);
+        let mut state = self.oscillator.state_at(self.start.0, self.start.1, f0);
+        let start = std::time::Instant::now();
+        for &f in inputs {
+            let o = self.oscillator.step(&mut state, f);
+            std::hint::black_box((o.p, o.force, o.dissipated));
+        }
+        start.elapsed()
     }
 }

@@ -290,6 +290,14 @@ fn checked_duration(p: &ProfileSpec, dt: f64) -> Result<f64, String> {
             }
             Ok(duration_s)
         }
+        ProfileSpec::Hold {
+            duration_s,
+            preload,
+        } => {
+            finite_positive("duration_s", duration_s)?;
+            finite("preload", preload)?;
+            Ok(duration_s)
+        }
         ProfileSpec::Replay { ref samples, .. } => match (samples.first(), samples.last()) {
             (Some(_), Some(&(end, _))) if samples.len() >= 2 && end.is_finite() && end > 0.0 => {
                 Ok(end)
@@ -423,6 +431,7 @@ pub fn displacement(p: &ProfileSpec, t: f64) -> f64 {
             }
             x
         }
+        ProfileSpec::Hold { preload, .. } => preload,
         ProfileSpec::Replay { ref samples, .. } => interpolate(samples, t),
     }
 }
@@ -457,6 +466,7 @@ pub fn frequency_at(p: &ProfileSpec, t: f64) -> Option<f64> {
         ProfileSpec::Triangle { .. }
         | ProfileSpec::MultiStep { .. }
         | ProfileSpec::StopStart { .. }
+        | ProfileSpec::Hold { .. }
         | ProfileSpec::Replay { .. } => None,
     }
 }
@@ -479,6 +489,7 @@ pub fn amplitude_at(p: &ProfileSpec, t: f64) -> Option<f64> {
         ProfileSpec::Triangle { .. }
         | ProfileSpec::MultiStep { .. }
         | ProfileSpec::StopStart { .. }
+        | ProfileSpec::Hold { .. }
         | ProfileSpec::Replay { .. } => None,
     }
 }

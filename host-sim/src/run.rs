@@ -166,6 +166,11 @@ fn run_typed<T: Real + 'static>(
         header.push_str(&format!(",{}_N", column_name(n)));
     }
     header.push_str(",dissipated_mJ");
+    // In an oscillator scene the profile is the applied force.
+    let oscillator = scene.oscillator.is_some();
+    if oscillator {
+        header.push_str(",applied_N");
+    }
     writeln!(csv, "{header}").map_err(|e| e.to_string())?;
 
     let steps = scene.steps();
@@ -177,7 +182,10 @@ fn run_typed<T: Real + 'static>(
     let mut power_t = Envelopes::new(names.len() + 1, bucket);
     let mut energy_t = Envelopes::new(names.len() + 1, bucket);
     let mut effect_energy = vec![0.0f64; names.len()];
-    let x0 = profile::displacement(&scene.profile, 0.0);
+    let x0 = match scene.oscillator {
+        Some(o) => o.p0,
+        None => profile::displacement(&scene.profile, 0.0),
+    };
     let (_, k0) = bushing::Backbone::eval(bushing.backbone(), T::from_f64(x0));
     let mut probe = ModulusProbe::new(scene.dt, k0.to_f64());
     let mut inputs = Vec::with_capacity(CHUNK);
@@ -201,13 +209,13 @@ fn run_typed<T: Real + 'static>(
         bushing.step_into(&inputs, &mut outputs, &mut parts);
         busy += start.elapsed().as_secs_f64();
         let mut line = String::new();
-        for (k, (x, o)) in inputs.iter().zip(&outputs).enumerate() {
+        for (k, (input, o)) in inputs.iter().zip(&outputs).enumerate() {
             let i = n + 1 + k as u64;
             let t = i as f64 * scene.dt;
             let step_energy = o.dissipated.to_f64();
             energy += step_energy;
             let f = o.force.to_f64();
-            let xf = x.to_f64();
+            let xf = o.x.to_f64();
             let elastic = o.elastic.to_f64();
             peak = peak.max(f.abs());
             let write_row = i.is_multiple_of(scene.trace_every) || i == steps;
@@ -242,13 +250,18 @@ fn run_typed<T: Real + 'static>(
             }
             if write_row {
                 line.push_str(&format!(",{energy:e}"));
+                if oscillator {
+                    line.push_str(&format!(",{:e}", input.to_f64()));
+                }
                 writeln!(csv, "{line}").map_err(|e| e.to_string())?;
             }
             if i.is_multiple_of(stride) {
                 loop_points.push((xf, f));
                 elastic_points.push((xf, elastic));
             }
+            // An oscillator's profile is a force: no imposed displacement.
             let sine = profile::frequency_at(&scene.profile, t)
+                .filter(|_| !oscillator)
                 .map(|fr| (fr, profile::amplitude_at(&scene.profile, t)));
             probe.push(sine, t, xf, f);
         }

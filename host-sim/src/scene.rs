@@ -61,6 +61,25 @@ pub struct SceneFile {
     /// What `run` writes; optional.
     #[serde(default)]
     pub output: Option<Spanned<OutputSpec>>,
+    /// A unit mass on the bushing, driven by the profile as a force;
+    /// optional.
+    #[serde(default)]
+    pub oscillator: Option<Spanned<OscillatorSpec>>,
+}
+
+/// `[oscillator]`: a unit modal mass on the bushing, `x'' + F(x) = f(t)`,
+/// the profile giving the force f in N instead of the displacement (seed
+/// 004 §2.8, the one-degree-of-freedom macro-model of a mode; the mass unit
+/// is N·s²/mm).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OscillatorSpec {
+    /// Displacement at t = 0, mm.
+    #[serde(default)]
+    pub p0: f64,
+    /// Velocity at t = 0, mm/s.
+    #[serde(default)]
+    pub v0: f64,
 }
 
 /// `[output]`: what `run` writes.
@@ -409,6 +428,15 @@ tagged_table! {
             #[serde(default)]
             preload: f64,
         },
+        /// A constant input: x held at `preload` (in an oscillator scene,
+        /// a constant force: 0 gives a free decay).
+        Hold {
+            /// Duration in s.
+            duration_s: f64,
+            /// The held value, mm (N in an oscillator scene).
+            #[serde(default)]
+            preload: f64,
+        },
         /// Replay of a measured displacement from a CSV file, linearly
         /// interpolated onto the scene's step.
         Replay {
@@ -490,6 +518,8 @@ pub struct Scene {
     pub profile: ProfileSpec,
     /// Steps between two rows of `trace.csv` (1: every step).
     pub trace_every: u64,
+    /// A unit mass on the bushing, driven by the profile as a force.
+    pub oscillator: Option<OscillatorSpec>,
 }
 
 /// A validated effect.
@@ -707,6 +737,20 @@ impl Scene {
                     })?
             }
         };
+        let oscillator = match raw.oscillator {
+            None => None,
+            Some(o) => {
+                let span = o.span();
+                let o = o.into_inner();
+                let bad = |m: String| err(Some(span.clone()), format!("oscillator.{m}"));
+                for (name, v) in [("p0", o.p0), ("v0", o.v0)] {
+                    if !v.is_finite() {
+                        return Err(bad(format!("{name} must be finite, got {v}")));
+                    }
+                }
+                Some(o)
+            }
+        };
         Ok(Self {
             title: raw.title,
             dt,
@@ -715,6 +759,7 @@ impl Scene {
             effects,
             profile,
             trace_every,
+            oscillator,
         })
     }
 

@@ -262,6 +262,11 @@ fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
             })
             .collect(),
     };
+    if scene.oscillator.is_some() {
+        return Ok(none(
+            "an oscillator scene: the displacement is not imposed (the free decay of the Iwan oscillator is checked by the tracker suites)",
+        ));
+    }
     let Some(p) = periodic(&scene.profile) else {
         return Ok(none("the profile is not a periodic sine or triangle"));
     };

@@ -187,6 +187,9 @@ fn committed_xf_table_is_current() {
 fn compiled_equals_list<T: bushing::Real + 'static>(scene: &Scene) {
     use bushing_sim::model::{self, Shape};
     let mut compiled = model::compile::<T>(scene).unwrap();
+    if let Some(spec) = scene.oscillator {
+        return oscillator_equals_core::<T>(scene, spec, compiled.as_mut());
+    }
     let expected = match scene.effects.len() {
         0 => Shape::BackboneOnly,
         1 => Shape::One,
@@ -236,6 +239,39 @@ fn compiled_equals_list<T: bushing::Real + 'static>(scene: &Scene) {
         }
     }
     assert_eq!(compiled.refused(), state.rejected());
+}
+
+/// An oscillator scene steps as the core's `Oscillator` on the effect
+/// list, the profile giving the force.
+fn oscillator_equals_core<T: bushing::Real + 'static>(
+    scene: &Scene,
+    spec: bushing_sim::scene::OscillatorSpec,
+    compiled: &mut dyn bushing_sim::model::SceneModel<T>,
+) {
+    use bushing_sim::model::{self, Shape};
+    assert_eq!(compiled.shape(), Shape::Oscillator);
+    let force = |n: u64| {
+        T::from_f64(bushing_sim::profile::displacement(
+            &scene.profile,
+            n as f64 * scene.dt,
+        ))
+    };
+    let core = bushing::Oscillator::new(model::build::<T>(scene).unwrap(), scene.dt).unwrap();
+    let mut state = core.state_at(T::from_f64(spec.p0), T::from_f64(spec.v0), force(0));
+    let inputs: Vec<T> = (1..=scene.steps().min(20_000)).map(force).collect();
+    let (mut rows, mut parts) = (Vec::new(), Vec::new());
+    compiled.step_into(&inputs, &mut rows, &mut parts);
+    assert_eq!(parts.len(), inputs.len() * scene.effects.len());
+    for (n, (&f, row)) in inputs.iter().zip(&rows).enumerate() {
+        let o = core.step(&mut state, f);
+        assert_eq!(
+            [row.x, row.force, row.dissipated].map(|v| v.bits()),
+            [o.p, o.force, o.dissipated].map(|v| v.bits()),
+            "{}: step {n}",
+            scene.title
+        );
+        assert_eq!(row.refused, !o.converged);
+    }
 }
 
 #[test]
