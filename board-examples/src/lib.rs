@@ -6,9 +6,10 @@
 use core::f64::consts::PI;
 
 use bushing::{
-    Backbone, Berg, BoucWen, Bushing, Compensated, Dahl, Effect, FirstLoading, FractionalSpec,
-    Grunwald, IwanBank, IwanCellSpec, IwanSliders, MaxwellBank, MaxwellForm, MaxwellSpec,
-    MonotoneSpline, Oscillator, ParamError, Polynomial, Sts, TurningPoints, XfBank, XfForm, XfSpec,
+    Accumulator, Backbone, Berg, BoucWen, Bushing, Compensated, Dahl, Drive, Effect, FirstLoading,
+    FractionalSpec, Grunwald, IwanBank, IwanCellSpec, IwanSliders, MaxwellBank, MaxwellForm,
+    MaxwellSpec, MonotoneSpline, Oscillator, ParamError, Plain, Polynomial, Sts, TurningPoints,
+    XfBank, XfForm, XfSpec,
 };
 
 /// Control period of the probes: 2 kHz.
@@ -213,4 +214,92 @@ pub fn run<B: Backbone<f32>, E: Effect<f32>>(
         let o = b.step(&mut s, core::hint::black_box(x));
         sink(o.force, o.tangent, o.dissipated);
     }
+}
+
+/// `N` Maxwell cells in `form`, corners spread evenly in log frequency from
+/// 0.01 Hz to 100 Hz (one cell: 1 Hz), total fraction 0.5.
+pub fn maxwell_bank<const N: usize, A: Accumulator<f32>>(
+    form: MaxwellForm,
+) -> Result<MaxwellBank<f32, N, A>, ParamError> {
+    let mut cells = [MaxwellSpec::new(1.0, 0.5); N];
+    let step = if N > 1 { 4.0 / (N - 1) as f64 } else { 0.0 };
+    let mut exponent = if N > 1 { -2.0 } else { 0.0 };
+    for c in &mut cells {
+        *c = MaxwellSpec::hz(libm::pow(10.0, exponent), 0.5 / N as f64);
+        exponent += step;
+    }
+    MaxwellBank::new(form, &cells, DT)
+}
+
+/// `N` Jenkins cells on 150 N/mm, slip distances spread evenly in log from
+/// 0.02 mm to 1.5 mm, total fraction 0.4 (clamp form).
+pub fn iwan_bank<const N: usize>() -> Result<IwanBank<f32, N>, ParamError> {
+    IwanBank::new(&jenkins::<N>())
+}
+
+/// The cells of [`iwan_bank`].
+pub fn jenkins<const N: usize>() -> [IwanCellSpec; N] {
+    let mut cells = [IwanCellSpec::new(0.1, 1.0); N];
+    let ratio = if N > 1 {
+        libm::pow(75.0, 1.0 / (N - 1) as f64)
+    } else {
+        1.0
+    };
+    let mut x_f = 0.02;
+    for c in &mut cells {
+        *c = IwanCellSpec::from_slip_distance(0.4 / N as f64, 150.0, x_f);
+        x_f *= ratio;
+    }
+    cells
+}
+
+/// The thesis's default 1D bushing: spline backbone, 4 Maxwell cells
+/// (exact ramp, plain states), 3 Jenkins cells (clamp form).
+pub type DefaultBushing =
+    Bushing<f32, MonotoneSpline<f32, 8>, (MaxwellBank<f32, 4>, IwanBank<f32, 3>)>;
+
+/// Builds the [`DefaultBushing`].
+pub fn default_bushing() -> Result<DefaultBushing, ParamError> {
+    let jenkins = [JENKINS[0], JENKINS[1], JENKINS[2]];
+    Bushing::new(
+        spline()?,
+        (
+            MaxwellBank::<f32, 4, Plain<f32>>::new(MaxwellForm::RateExactRamp, &CELLS, DT)?,
+            IwanBank::new(&jenkins)?,
+        ),
+    )
+}
+
+/// Sine input of `N` samples, amplitude `amplitude` mm and `period` samples.
+pub fn sine<const N: usize>(amplitude: f64, period: usize) -> [f32; N] {
+    let mut x = [0.0f32; N];
+    let w = 2.0 * PI / period.max(1) as f64;
+    for (i, v) in x.iter_mut().enumerate() {
+        *v = (amplitude * libm::sin(w * i as f64)) as f32;
+    }
+    x
+}
+
+/// The drives an effect sees when the polynomial backbone follows `xs`.
+pub fn drives<const N: usize>(backbone: &Polynomial<f32, 4>, xs: &[f32; N]) -> [Drive<f32>; N] {
+    let mut out = [Drive {
+        x: 0.0,
+        dx: 0.0,
+        f_inf: 0.0,
+        df_inf: 0.0,
+        k_inf: 1.0,
+    }; N];
+    let (mut x_old, mut f_old) = (0.0, 0.0);
+    for (d, &x) in out.iter_mut().zip(xs) {
+        let (f, k) = backbone.eval(x);
+        *d = Drive {
+            x,
+            dx: x - x_old,
+            f_inf: f,
+            df_inf: f - f_old,
+            k_inf: k,
+        };
+        (x_old, f_old) = (x, f);
+    }
+    out
 }

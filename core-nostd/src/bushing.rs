@@ -83,6 +83,13 @@ pub trait Effect<T: Real> {
     fn rest(&self, x0: T) -> Self::State;
     /// Advances the state by one step.
     fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> Self::Report;
+    /// Advances the state by one step and returns the force alone: the
+    /// same state as [`Effect::step`], for a loop that reads nothing else
+    /// (banks override it to skip the energy and tangent work).
+    #[inline(always)]
+    fn step_force(&self, state: &mut Self::State, drive: &Drive<T>) -> T {
+        Self::total(&self.step(state, drive)).force
+    }
     /// Sum of the branch outputs of a report.
     fn total(report: &Self::Report) -> EffectOutput<T>;
 }
@@ -355,7 +362,9 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
 
     /// The step `step` would take, without changing `state`: returns the
     /// output and the state it would commit (for implicit solvers that
-    /// iterate on x and commit only the converged state).
+    /// iterate on x and commit only the converged state). Always inlined,
+    /// so that the copy of the state stays in registers where it can.
+    #[inline(always)]
     pub fn trial(
         &self,
         state: &BushingState<T, E::State>,

@@ -75,6 +75,8 @@ pub mod backbone;
 pub mod bushing;
 pub mod discretize;
 pub mod error;
+#[cfg(feature = "fixed")]
+pub mod fixed;
 pub mod fractional;
 pub mod friction;
 pub mod iwan;
@@ -86,7 +88,9 @@ pub mod temperature;
 pub mod tracker;
 pub mod xf;
 
-pub use accumulator::{Accumulator, Compensated, Plain};
+#[cfg(feature = "fixed")]
+pub use self::fixed::{Q16, Q32};
+pub use accumulator::{Accumulator, Compensated, Multiplied, Plain};
 pub use backbone::{Backbone, MonotoneSpline, Polynomial};
 pub use bushing::{Bushing, BushingState, Drive, Effect, EffectOutput, Output};
 pub use error::{Faults, Param, ParamError};

@@ -220,18 +220,18 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Oscillator<T, B, E> {
         }
         let predicted = state.p + self.h * state.v + self.beta * state.a;
         let mut a = state.a;
-        let (mut out, mut next) = self
-            .restoring
-            .trial(&state.restoring, predicted + self.beta * a);
+        // Each chord iteration steps a scratch copy of the committed state
+        // (one copy per iteration, none returned).
+        let mut next = state.restoring.clone();
+        let mut out = self.restoring.step(&mut next, predicted + self.beta * a);
         let mut iterations = 0;
         let mut converged = false;
         while iterations < self.max_iterations {
             iterations += 1;
             let correction = (a + out.force - f) * self.inv_slope;
             a -= correction;
-            (out, next) = self
-                .restoring
-                .trial(&state.restoring, predicted + self.beta * a);
+            next.clone_from(&state.restoring);
+            out = self.restoring.step(&mut next, predicted + self.beta * a);
             let scale = a.abs() + f.abs() + out.force.abs();
             if correction.abs() <= self.tolerance * scale {
                 converged = true;

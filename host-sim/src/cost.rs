@@ -35,12 +35,12 @@ use std::time::Duration;
 
 use bushing::{
     Accumulator, Backbone, Bushing, Compensated, Effect, MaxwellBank, MaxwellForm, MaxwellSpec,
-    Plain, Real,
+    Multiplied, Plain, Real,
 };
 
 use crate::model::{self, AnyBackbone, SceneBushing, Shape};
 use crate::profile;
-use crate::scene::{BackboneSpec, Effect as EffectDesc, NumberType, Scene};
+use crate::scene::{BackboneSpec, Effect as EffectDesc, NumberType, Scene, Storage};
 
 /// How long to time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -278,7 +278,7 @@ fn firmware_maxwell<T: Real + 'static>(
     form: MaxwellForm,
     cells: &[MaxwellSpec],
     dt: f64,
-    compensated: bool,
+    storage: Storage,
 ) -> Option<Timer<T>> {
     fn bank<T: Real + 'static, A: Accumulator<T> + 'static, const N: usize>(
         backbone: &AnyBackbone<T>,
@@ -305,10 +305,10 @@ fn firmware_maxwell<T: Real + 'static>(
             }
         };
     }
-    if compensated {
-        sizes!(Compensated<T>)
-    } else {
-        sizes!(Plain<T>)
+    match storage {
+        Storage::Plain => sizes!(Plain<T>),
+        Storage::Multiplied => sizes!(Multiplied<T>),
+        Storage::Compensated => sizes!(Compensated<T>),
     }
 }
 
@@ -368,10 +368,10 @@ fn plan<T: Real + 'static>(scene: &Scene) -> Result<Plan<T>, String> {
     for effect in &scene.effects {
         if let EffectDesc::Maxwell {
             form,
-            compensated,
+            storage,
             cells,
         } = effect
-            && let Some(t) = firmware_maxwell(&backbone, *form, cells, scene.dt, *compensated)
+            && let Some(t) = firmware_maxwell(&backbone, *form, cells, scene.dt, *storage)
         {
             comparisons.push((
                 format!(
@@ -379,7 +379,11 @@ fn plan<T: Real + 'static>(scene: &Scene) -> Result<Plan<T>, String> {
                     EffectDesc::name(effect),
                     scene.number.name(),
                     cells.len(),
-                    if *compensated { ", Compensated" } else { "" }
+                    match storage {
+                        Storage::Plain => "",
+                        Storage::Multiplied => ", Multiplied",
+                        Storage::Compensated => ", Compensated",
+                    }
                 ),
                 true,
             ));

@@ -8,6 +8,7 @@
 //! modulus of the Maxwell forms against the closed form.
 #![forbid(unsafe_code)]
 
+pub mod accuracy_cost;
 pub mod cost;
 pub mod fit;
 pub mod fractional_report;

@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use bushing_sim::{Scene, cost, fractional_report, iwan_report, modulus, run, validate, xf_report};
+use bushing_sim::{
+    Scene, accuracy_cost, cost, fractional_report, iwan_report, modulus, run, validate, xf_report,
+};
 
 const USAGE: &str = "\
 usage:
@@ -15,6 +17,8 @@ usage:
   bushing-sim xf-table [--out FILE]        saturation of the x_f cell forms against the step
   bushing-sim iwan-table [--out FILE]      Iwan discretisations of the STS and Segalman laws
   bushing-sim fractional-table [--out FILE]  Grünwald accuracy, Maxwell fits and their cost
+  bushing-sim accuracy-cost [--quick] --kernels FILE... --elf TRIPLE=PATH... [--peers FILE...] --out DIR
+                                           error against cost of every kernel (docs/accuracy-cost.md)
   bushing-sim help";
 
 /// Steps per part for `cost --instructions`.
@@ -87,6 +91,16 @@ fn dispatch(args: &[String]) -> Result<(), String> {
                 _ => print!("{text}"),
             }
             Ok(())
+        }
+        ["accuracy-cost", rest @ ..] => {
+            print!("{}", accuracy_cost::cli(rest)?);
+            Ok(())
+        }
+        ["accuracy-cost-part", calls] => {
+            let calls = calls
+                .parse::<usize>()
+                .map_err(|e| format!("{calls}: {e}"))?;
+            accuracy_cost::host::run_part(calls)
         }
         ["help"] | ["--help"] | ["-h"] => {
             println!("{USAGE}");

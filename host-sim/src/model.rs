@@ -2,17 +2,18 @@
 //! scene lists are built, kept in a list in the scene's order, and a step
 //! visits only those.
 
-use bushing::iwan::{self, ClampCell, SliderCell};
+use bushing::iwan::{self, ClampCell, Held, SliderCell};
 use bushing::maxwell::{self, MaxwellCell};
 use bushing::xf::{self, XfCell};
 use bushing::{
     Accumulator, Backbone, Berg, BoucWen, Bushing, BushingState, Compensated, Dahl, Drive, Effect,
-    EffectOutput, IwanCellSpec, KfTable, MaxwellForm, MaxwellSpec, MonotoneSpline, Oscillator,
-    OscillatorState, ParamError, Plain, Polynomial, Real, Sts, TurningPoints, XfForm, XfSpec,
+    EffectOutput, IwanCellSpec, KfTable, MaxwellForm, MaxwellSpec, MonotoneSpline, Multiplied,
+    Oscillator, OscillatorState, ParamError, Plain, Polynomial, Real, Sts, TurningPoints, XfForm,
+    XfSpec,
 };
 
 use crate::scene::{
-    BackboneSpec, Effect as EffectDesc, Friction, Law, STACK_DEPTH, Scene, TABLE_POINTS,
+    BackboneSpec, Effect as EffectDesc, Friction, Law, STACK_DEPTH, Scene, Storage, TABLE_POINTS,
 };
 
 /// Most polynomial coefficients a scene may give.
@@ -61,14 +62,16 @@ pub struct DynMaxwell<T> {
     tangent_gain: T,
     fraction: f64,
     dt: f64,
-    compensated: bool,
+    storage: Storage,
 }
 
 /// State of a [`DynMaxwell`].
 #[derive(Debug, Clone, PartialEq)]
 pub enum DynMaxwellState<T> {
-    /// One word per cell.
+    /// One word per cell, `F - d F`.
     Plain(Vec<Plain<T>>),
+    /// One word per cell, `e^-h F`.
+    Multiplied(Vec<Multiplied<T>>),
     /// Two words per cell.
     Compensated(Vec<Compensated<T>>),
 }
@@ -79,7 +82,7 @@ impl<T: Real> DynMaxwell<T> {
         form: MaxwellForm,
         specs: &[MaxwellSpec],
         dt: f64,
-        compensated: bool,
+        storage: Storage,
     ) -> Result<Self, ParamError> {
         let cells = specs
             .iter()
@@ -92,7 +95,7 @@ impl<T: Real> DynMaxwell<T> {
             cells,
             fraction: specs.iter().map(|s| s.g).sum(),
             dt,
-            compensated,
+            storage,
         })
     }
 }
@@ -112,16 +115,20 @@ impl<T: Real> Effect<T> for DynMaxwell<T> {
         Some(self.dt)
     }
     fn rest(&self, _: T) -> Self::State {
-        if self.compensated {
-            DynMaxwellState::Compensated(zeros(self.cells.len()))
-        } else {
-            DynMaxwellState::Plain(zeros(self.cells.len()))
+        let n = self.cells.len();
+        match self.storage {
+            Storage::Plain => DynMaxwellState::Plain(zeros(n)),
+            Storage::Multiplied => DynMaxwellState::Multiplied(zeros(n)),
+            Storage::Compensated => DynMaxwellState::Compensated(zeros(n)),
         }
     }
     #[inline]
     fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> EffectOutput<T> {
         match state {
             DynMaxwellState::Plain(s) => {
+                maxwell::step_cells(self.form, &self.cells, s, self.tangent_gain, drive)
+            }
+            DynMaxwellState::Multiplied(s) => {
                 maxwell::step_cells(self.form, &self.cells, s, self.tangent_gain, drive)
             }
             DynMaxwellState::Compensated(s) => {
@@ -171,24 +178,48 @@ impl<T: Real, C> Effect<T> for DynBank<T, C> {
     }
 }
 
-/// Iwan bank, clamp form.
-pub type DynIwanClamp<T> = DynBank<T, ClampCell<T>>;
+/// Iwan bank, clamp form, sized at run time (the core's clamp kernel).
+#[derive(Debug, Clone)]
+pub struct DynIwanClamp<T> {
+    cells: Vec<ClampCell<T>>,
+    fraction: f64,
+}
+
+impl<T: Real> Effect<T> for DynIwanClamp<T> {
+    type State = (Vec<T>, Held<T>);
+    type Report = EffectOutput<T>;
+
+    fn fraction(&self) -> f64 {
+        self.fraction
+    }
+    fn dt(&self) -> Option<f64> {
+        None
+    }
+    fn rest(&self, _: T) -> Self::State {
+        (vec![T::ZERO; self.cells.len()], Held::default())
+    }
+    #[inline]
+    fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> EffectOutput<T> {
+        iwan::step_clamp(&self.cells, &mut state.0, &mut state.1, drive)
+    }
+    fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
+        *report
+    }
+}
+
 /// Iwan bank, slider form.
 pub type DynIwanSliders<T> = DynBank<T, SliderCell<T>>;
 /// x_f bank.
 pub type DynXf<T> = DynBank<T, XfCell<T>>;
 
 fn iwan_clamp<T: Real>(specs: &[IwanCellSpec]) -> Result<DynIwanClamp<T>, ParamError> {
-    Ok(DynBank {
+    Ok(DynIwanClamp {
         cells: specs
             .iter()
             .enumerate()
             .map(|(i, s)| ClampCell::new(*s, i))
             .collect::<Result<_, _>>()?,
-        kernel: iwan::step_clamp::<T>,
-        rest_at_x0: false,
         fraction: specs.iter().map(|s| s.g).sum(),
-        dt: None,
     })
 }
 
@@ -416,9 +447,9 @@ pub fn build<T: Real>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
         effects.push(match e {
             EffectDesc::Maxwell {
                 form,
-                compensated,
+                storage,
                 cells,
-            } => AnyEffect::Maxwell(DynMaxwell::new(*form, cells, scene.dt, *compensated)?),
+            } => AnyEffect::Maxwell(DynMaxwell::new(*form, cells, scene.dt, *storage)?),
             EffectDesc::Iwan {
                 slider: false,
                 cells,

@@ -158,7 +158,7 @@ tagged_table! {
             /// Discrete form: load-explicit, load-exponential, rate-explicit,
             /// rate-midpoint or rate-exact-ramp.
             form: String,
-            /// State storage: "plain" or "compensated".
+            /// State storage: "plain", "multiplied" or "compensated".
             #[serde(default = "default_state")]
             state: String,
             /// The cells.
@@ -522,6 +522,39 @@ pub struct Scene {
     pub oscillator: Option<OscillatorSpec>,
 }
 
+/// How the cells of a Maxwell bank store their state (the core's
+/// accumulators).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Storage {
+    /// `F - d F`, one word ([`bushing::Plain`]): slow cells keep their rate.
+    Plain,
+    /// `e^-h F`, one word ([`bushing::Multiplied`]): for cells not slow.
+    Multiplied,
+    /// Fast2Sum, two words ([`bushing::Compensated`]): slow cells in f32.
+    Compensated,
+}
+
+impl Storage {
+    /// Parses the scene's `state` value.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "plain" => Some(Self::Plain),
+            "multiplied" => Some(Self::Multiplied),
+            "compensated" => Some(Self::Compensated),
+            _ => None,
+        }
+    }
+
+    /// The scene's name of the storage.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Plain => "plain",
+            Self::Multiplied => "multiplied",
+            Self::Compensated => "compensated",
+        }
+    }
+}
+
 /// A validated effect.
 #[derive(Debug, Clone)]
 pub enum Effect {
@@ -529,8 +562,8 @@ pub enum Effect {
     Maxwell {
         /// Form.
         form: MaxwellForm,
-        /// Compensated state storage.
-        compensated: bool,
+        /// How each cell stores its state.
+        storage: Storage,
         /// Cells (ω in rad/s).
         cells: Vec<MaxwellSpec>,
     },
@@ -776,11 +809,9 @@ fn validate_effect(spec: EffectSpec, dt: f64, k_at_rest: f64) -> Result<Effect, 
                 let names: Vec<_> = MaxwellForm::ALL.iter().map(|f| f.name()).collect();
                 format!("form '{form}' is not one of {}", names.join(", "))
             })?;
-            let compensated = match state.as_str() {
-                "plain" => false,
-                "compensated" => true,
-                other => return Err(format!("state '{other}' is not one of plain, compensated")),
-            };
+            let storage = Storage::from_name(&state).ok_or_else(|| {
+                format!("state '{state}' is not one of plain, multiplied, compensated")
+            })?;
             check_count(cells.len())?;
             for (i, c) in cells.iter().enumerate() {
                 if !(c.f_hz.is_finite() && c.f_hz > 0.0) {
@@ -802,7 +833,7 @@ fn validate_effect(spec: EffectSpec, dt: f64, k_at_rest: f64) -> Result<Effect, 
             }
             Ok(Effect::Maxwell {
                 form,
-                compensated,
+                storage,
                 cells,
             })
         }

@@ -299,6 +299,7 @@ const WORDS: &[&str] = &[
     "form",
     "state",
     "plain",
+    "multiplied",
     "compensated",
     "load-explicit",
     "load-exponential",

@@ -11,11 +11,14 @@
 //!   amplitude (eqs 3.24-3.26) and the instantaneous complex modulus of a
 //!   sine test (seed 000 eqs 1.1-1.3, Fig 1.24).
 //! - [`trig`]: sin and cos of the phase step without libm trig.
+//! - [`fast`]: `e^x` of a small log-decay and `1/√x` without libm calls or
+//!   a division, for the per-sample path.
 //! - [`relevance`]: the Iwan relevance check (eqs 7.17-7.18): damping
 //!   predicted from the frequency drop of a tracked curve, and the inverse.
 //! - [`unscented`]: scalar unscented transform and linearisation (eqs
 //!   3.34-3.40), compared with Table 1 of §3.2.4 in `docs/unscented-table.md`.
 
+pub mod fast;
 pub mod init;
 pub mod modal;
 pub mod relevance;

@@ -24,6 +24,17 @@
 //!   and update the covariance in the Joseph form for a scalar observation,
 //!   `P - K Pxzᵀ - Pxz Kᵀ + Pzz K Kᵀ`, which stays valid when a gain row is
 //!   zeroed (frozen parameters), computed on one triangle and mirrored.
+//! - **Structure**: F is the identity on the θ and λ rows and a scaled
+//!   rotation plus two columns on each pair's rows, so the EKF prediction
+//!   transforms only the pair rows and then their columns on one triangle.
+//!   The UKF factors P with θ and λ first: the sigma points of the amplitude
+//!   columns then share the centre's θ and λ, move linearly under the
+//!   process and the sensors, and add exactly `R S Rᵀ` (S the amplitude
+//!   covariance given θ and λ) to the predicted covariance, `H S Hᵀ` to Pzz
+//!   and `S Hᵀ` to Pxz; only the 4 modes sigma points of the θ and λ
+//!   columns are propagated one by one. This is the scaled transform for
+//!   that square root of P, not an approximation (tested against all
+//!   2n + 1 points).
 //! - **Safety**: θ kept in (0, θ_max] below Nyquist and λ in a band given by
 //!   the largest damping ratio; covariance diagonal floored; an innovation
 //!   gate (outliers skipped, a run of them re-acquires); a mode whose
@@ -31,15 +42,30 @@
 //!   σ are frozen and its amplitudes kept loose until it comes back above
 //!   twice that, when ω and σ get their start uncertainty again (they may
 //!   have moved while the mode was gone) and are tracked again. A step
-//!   that would leave a non-finite state is undone and the covariance reset.
+//!   that would leave a non-finite state (or meets a covariance that is not
+//!   positive definite, or an innovation variance that is not positive and
+//!   below [`Real::GUARD`]) is undone and the covariance reset.
 //! - **States**: `N = modes (2 sensors + 2)` values and an N×N covariance.
-//! - **Cost** per sample, n = N states, C sensors: EKF about 8n² (covariance
-//!   prediction) + C (6n + 2n²/2) multiply-adds, one `expf` and one sin/cos
-//!   polynomial per mode, one division per sensor; UKF one n×n Cholesky
-//!   per sensor and per prediction and 2n + 1 process or observation
-//!   evaluations each. No f64 and no libm trig per sample.
+//! - **Cost** per sample, n = N states, M modes, C sensors: EKF about 6n²
+//!   (prediction) + C (n² + 4Mn) multiply-adds and one division per sensor;
+//!   UKF one factorisation (n³/6 multiply-adds, n - 1 Newton `1/√d`) per
+//!   prediction and per sensor, (4M + 1) n²/2 for the predicted covariance
+//!   and 4M observations per sensor. The rotation `e^λ (cos θ, sin θ)` is
+//!   taken in `f32` from a per-mode anchor when (θ, λ) is within 2^-10 of
+//!   it (a second-order series, [`ModalState`] keeps the anchor) and the
+//!   sigma points' from the centre's by a fourth-order series; the sin/cos
+//!   polynomial and `e^λ` run only when an anchor moves. Below 8 states
+//!   (one mode) the whole step is unrolled on a copy of the state held in
+//!   registers. No f64, no libm trig and no square root per sample.
+//!   Guest instructions per call on Cortex-M4F (QEMU, f32; `cargo run -q -p
+//!   bushing-boards --release --target thumbv7em-none-eabihf --bin
+//!   step-cost`): one mode and one accelerometer (4 states) EKF 295, UKF
+//!   910; two modes and three accelerometers (16 states) EKF 15 282, UKF
+//!   107 022. Called through a non-inlined function, as `--bin kernel-cost`
+//!   does, the 4-state EKF costs 344 and the UKF 1002.
 
-use super::trig::sin_cos;
+use super::fast::{exp_small, is_f32, min_positive, rsqrt};
+use super::trig::{sin_cos, sin_cos_in_range};
 use crate::error::{Param, ParamError, finite, in_range, positive};
 use crate::real::Real;
 
@@ -253,10 +279,10 @@ pub struct ModalReport {
 /// Running state: estimate, covariance and counters.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModalState<T, const N: usize> {
-    x: [T; N],
-    p: [[T; N]; N],
-    faded: [bool; N],
-    run: u32,
+    core: Core<T, N>,
+    /// Per mode, a cached rotation `[θa, λa, e^λa cos θa, e^λa sin θa]`
+    /// (see `rotation_near`).
+    anchor: [[T; 4]; N],
     /// Samples gated out since the start.
     pub outliers: u32,
     /// Covariance resets since the start.
@@ -265,14 +291,24 @@ pub struct ModalState<T, const N: usize> {
     pub reacquisitions: u32,
 }
 
+/// What a step works on and an undo restores: estimate, covariance,
+/// faded flags, outlier run.
+#[derive(Debug, Clone, PartialEq)]
+struct Core<T, const N: usize> {
+    x: [T; N],
+    p: [[T; N]; N],
+    faded: [bool; N],
+    run: u32,
+}
+
 impl<T: Real, const N: usize> ModalState<T, N> {
     /// The state vector (per mode: θ, λ, then a, b per sensor).
     pub fn x(&self) -> &[T; N] {
-        &self.x
+        &self.core.x
     }
     /// The covariance.
     pub fn covariance(&self) -> &[[T; N]; N] {
-        &self.p
+        &self.core.p
     }
 }
 
@@ -324,10 +360,40 @@ pub struct ModalTracker<T, const N: usize> {
     theta_min: T,
     lambda_min: T,
     lambda_max: T,
+    /// Centre and half-width of the θ band, and half-width of the λ band
+    /// (centred on 0), shrunk by a few ulps: inside them no clamp is needed.
+    theta_mid: T,
+    theta_half: T,
+    lambda_half: T,
     gate2: T,
     outlier_run: u32,
-    fade2: T,
-    ut: (T, T, T, T),
+    /// Per sensor: `fade_snr² r`, below which a mode fades, and four times
+    /// that, above which it is back.
+    fade_below: [T; N],
+    fade_above: [T; N],
+    ut: Weights<T>,
+    /// Elimination order of the UKF's factorisation: θ and λ of every mode,
+    /// then the amplitudes.
+    pivots: [usize; N],
+    /// True for the amplitude states.
+    amplitude: [bool; N],
+}
+
+/// Scaled-UT constants in the working type, the 2(n - 2 modes) sigma points
+/// of the amplitude columns folded into the centre weights (see
+/// `predict_ukf`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Weights<T> {
+    /// √(n + λ).
+    spread: T,
+    /// W_i.
+    wi: T,
+    /// W_i √(n + λ).
+    wi_spread: T,
+    /// W_0^m + 2 W_i (n - 2 modes).
+    centre_mean: T,
+    /// W_0^c + 2 W_i (n - 2 modes).
+    centre_cov: T,
 }
 
 impl<T: Real, const N: usize> ModalTracker<T, N> {
@@ -417,19 +483,52 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             theta_min: T::from_f64(theta_max * 1e-6),
             lambda_min: T::ZERO,
             lambda_max: T::ZERO,
+            theta_mid: T::ZERO,
+            theta_half: T::ZERO,
+            lambda_half: T::ZERO,
             gate2: T::from_f64(gate * gate),
             outlier_run: t.outlier_run.max(1),
-            fade2: T::from_f64(fade * fade),
-            ut: (T::ZERO, T::ZERO, T::ZERO, T::ZERO),
+            fade_below: [T::ZERO; N],
+            fade_above: [T::ZERO; N],
+            ut: Weights {
+                spread: T::ZERO,
+                wi: T::ZERO,
+                wi_spread: T::ZERO,
+                centre_mean: T::ZERO,
+                centre_cov: T::ZERO,
+            },
+            pivots: [0; N],
+            amplitude: [false; N],
         };
         if let Filter::Ukf(ut) = filter {
             let (g, w0m, w0c, wi) = ut.weights(N)?;
-            me.ut = (
-                T::from_f64(g),
-                T::from_f64(w0m),
-                T::from_f64(w0c),
-                T::from_f64(wi),
-            );
+            let folded = 2.0 * wi * (N - 2 * m_n) as f64;
+            me.ut = Weights {
+                spread: T::from_f64(g),
+                wi: T::from_f64(wi),
+                wi_spread: T::from_f64(wi * g),
+                centre_mean: T::from_f64(w0m + folded),
+                centre_cov: T::from_f64(w0c + folded),
+            };
+        }
+        // Factorisation order: θ and λ of every mode first, so that the
+        // square-root columns of the amplitudes leave θ and λ alone.
+        let mut next = 0;
+        for m in 0..m_n {
+            let (ti, li) = me.theta_lambda(m);
+            put(&mut me.pivots, next, ti);
+            put(&mut me.pivots, next + 1, li);
+            next += 2;
+        }
+        for m in 0..m_n {
+            for c in 0..c_n {
+                let (ai, bi) = me.pair(m, c);
+                put(&mut me.pivots, next, ai);
+                put(&mut me.pivots, next + 1, bi);
+                put(&mut me.amplitude, ai, true);
+                put(&mut me.amplitude, bi, true);
+                next += 2;
+            }
         }
         // Modes: phase step and log-decay per sample.
         let mut steps = [(0.0f64, 0.0f64); N];
@@ -475,6 +574,12 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         let lam = max_z * largest_omega0_dt;
         me.lambda_min = T::from_f64(-lam);
         me.lambda_max = T::from_f64(lam);
+        let shrink = 1.0 - 8.0 * T::EPSILON.to_f64();
+        let (t_lo, t_hi) = (me.theta_min.to_f64(), me.theta_max.to_f64());
+        me.theta_mid = T::from_f64(0.5 * (t_lo + t_hi));
+        me.theta_half =
+            T::from_f64(0.5 * (t_hi - t_lo) * shrink - 4.0 * T::EPSILON.to_f64() * t_hi);
+        me.lambda_half = T::from_f64(me.lambda_max.to_f64() * shrink);
         // Sensors: scale the displacement-equivalent amplitudes to one.
         for (c, s) in sensors.iter().enumerate() {
             let noise = positive(Param::item("noise", c), s.noise)?;
@@ -510,7 +615,11 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             put(&mut me.measured, c, s.measured);
             put(&mut me.scale, c, T::from_f64(total));
             put(&mut me.meas_gain, c, T::from_f64(powk(dt, k) / total));
-            put(&mut me.r, c, T::from_f64(sq(noise * powk(dt, k) / total)));
+            let r = T::from_f64(sq(noise * powk(dt, k) / total));
+            put(&mut me.r, c, r);
+            let fade2 = T::from_f64(fade * fade);
+            put(&mut me.fade_below, c, fade2 * r);
+            put(&mut me.fade_above, c, T::from_f64(4.0) * (fade2 * r));
             for (m, &(dr, di)) in disp.iter().take(m_n).enumerate() {
                 let (ai, bi) = me.pair(m, c);
                 put(&mut me.x0, ai, T::from_f64(dr / total));
@@ -538,37 +647,88 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         self.dt
     }
 
+    /// Number of modes for the per-sample code: a mode takes at least four
+    /// states, so below eight there is one, known at compile time.
+    #[inline(always)]
+    fn m_n(&self) -> usize {
+        if N < 8 { 1 } else { self.modes }
+    }
+
+    /// Number of sensors for the per-sample code: with one mode, `(N - 2)/2`.
+    #[inline(always)]
+    fn c_n(&self) -> usize {
+        if N < 8 {
+            N.saturating_sub(2) / 2
+        } else {
+            self.sensors
+        }
+    }
+
+    /// State index of the t-th pivot of the UKF's factorisation.
+    #[inline(always)]
+    fn pivot(&self, t: usize) -> usize {
+        if N < 8 {
+            t
+        } else {
+            self.pivots.get(t).copied().unwrap_or(0)
+        }
+    }
+
+    /// True for an amplitude state.
+    #[inline(always)]
+    fn is_amplitude(&self, i: usize) -> bool {
+        if N < 8 {
+            i >= 2
+        } else {
+            self.amplitude.get(i).copied().unwrap_or(false)
+        }
+    }
+
     /// The start state: the initial estimate and its diagonal covariance.
     pub fn start(&self) -> ModalState<T, N> {
-        let mut p = [[T::ZERO; N]; N];
-        for (i, row) in p.iter_mut().enumerate() {
-            put(row, i, get(&self.p0, i));
+        let mut anchor = [[T::ZERO; 4]; N];
+        for (m, a) in anchor.iter_mut().enumerate().take(self.m_n()) {
+            let (ti, li) = self.theta_lambda(m);
+            *a = anchor_at(get(&self.x0, ti), get(&self.x0, li));
         }
         ModalState {
-            x: self.x0,
-            p,
-            faded: [false; N],
-            run: 0,
+            core: Core {
+                x: self.x0,
+                p: self.start_covariance(),
+                faded: [false; N],
+                run: 0,
+            },
+            anchor,
             outliers: 0,
             repairs: 0,
             reacquisitions: 0,
         }
     }
 
+    fn start_covariance(&self) -> [[T; N]; N] {
+        let mut p = [[T::ZERO; N]; N];
+        for (i, row) in p.iter_mut().enumerate() {
+            put(row, i, get(&self.p0, i));
+        }
+        p
+    }
+
+    #[inline(always)]
     fn theta_lambda(&self, m: usize) -> (usize, usize) {
-        let base = m * (2 * self.sensors + 2);
+        let base = m * (2 * self.c_n() + 2);
         (base, base + 1)
     }
 
+    #[inline(always)]
     fn pair(&self, m: usize, c: usize) -> (usize, usize) {
-        let base = m * (2 * self.sensors + 2) + 2 + 2 * c;
+        let base = m * (2 * self.c_n() + 2) + 2 + 2 * c;
         (base, base + 1)
     }
 
     /// Frequency, damping and frozen flag of mode `m` (eq 3.7 closed form).
     pub fn mode(&self, state: &ModalState<T, N>, m: usize) -> ModeStatus<T> {
         let (ti, li) = self.theta_lambda(m);
-        let (theta, lambda) = (get(&state.x, ti), get(&state.x, li));
+        let (theta, lambda) = (get(&state.core.x, ti), get(&state.core.x, li));
         let inv_dt = T::from_f64(1.0 / self.dt);
         let w0dt = (theta * theta + lambda * lambda).sqrt();
         ModeStatus {
@@ -580,7 +740,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             },
             omega: theta * inv_dt,
             sigma: lambda * inv_dt,
-            faded: state.faded.get(m).copied().unwrap_or(false),
+            faded: state.core.faded.get(m).copied().unwrap_or(false),
         }
     }
 
@@ -590,27 +750,17 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     pub fn displacement(&self, state: &ModalState<T, N>, m: usize, c: usize) -> (T, T) {
         let (ai, bi) = self.pair(m, c);
         let s = get(&self.scale, c) * T::from_f64(1.0 / powk(self.dt, self.measured_order(c)));
-        (get(&state.x, ai) * s, get(&state.x, bi) * s)
+        (get(&state.core.x, ai) * s, get(&state.core.x, bi) * s)
     }
 
     fn measured_order(&self, c: usize) -> i32 {
         self.measured.get(c).copied().unwrap_or_default().order()
     }
 
-    /// `(e^λ cos θ, e^λ sin θ)` of mode `m`: its one sin/cos polynomial and
-    /// `exp` per step.
-    #[inline(always)]
-    fn rotation(&self, x: &[T; N], m: usize) -> (T, T) {
-        let (ti, li) = self.theta_lambda(m);
-        let (s, c) = sin_cos(get(x, ti));
-        let e = get(x, li).exp();
-        (e * c, e * s)
-    }
-
     /// Rotates mode `m`'s analytic-signal pairs by `(ec, es)` (eq 3.28).
     #[inline(always)]
     fn rotate_mode(&self, x: &mut [T; N], m: usize, (ec, es): (T, T)) {
-        for k in 0..self.sensors {
+        for k in 0..self.c_n() {
             let (ai, bi) = self.pair(m, k);
             let (a, b) = (get(x, ai), get(x, bi));
             put(x, ai, ec * a - es * b);
@@ -618,86 +768,124 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         }
     }
 
-    /// Applies the process (eq 3.28) to a state vector.
-    fn process(&self, x: &mut [T; N]) {
-        for m in 0..self.modes {
-            let r = self.rotation(x, m);
-            self.rotate_mode(x, m, r);
-        }
-    }
-
-    /// Predicted sample of sensor `c` (scaled) and its gradient entries at
-    /// (θ, λ, a, b) for mode `m`.
-    fn observe_mode(&self, x: &[T; N], m: usize, c: usize) -> (T, [T; 4]) {
-        let (ti, li) = self.theta_lambda(m);
-        let (ai, bi) = self.pair(m, c);
-        let (t, l, a, b) = (get(x, ti), get(x, li), get(x, ai), get(x, bi));
-        let two = T::ONE + T::ONE;
+    /// `(α, β)` such that sensor `c` reads `α a + β b` of a pair whose mode
+    /// has phase step `t` and log-decay `l`: the real part of `(l + i t)^k`
+    /// times `a + i b`.
+    #[inline(always)]
+    fn coefficients(&self, c: usize, t: T, l: T) -> (T, T) {
         match self.measured.get(c).copied().unwrap_or_default() {
-            Measured::Displacement => (a, [T::ZERO, T::ZERO, T::ONE, T::ZERO]),
-            Measured::Velocity => (l * a - t * b, [-b, a, l, -t]),
-            Measured::Acceleration => {
-                let (ca, cb) = (l * l - t * t, -two * l * t);
-                (
-                    ca * a + cb * b,
-                    [-two * (t * a + l * b), two * (l * a - t * b), ca, cb],
-                )
-            }
+            Measured::Displacement => (T::ONE, T::ZERO),
+            Measured::Velocity => (l, -t),
+            Measured::Acceleration => (l * l - t * t, -(T::ONE + T::ONE) * l * t),
         }
-    }
-
-    fn observe(&self, x: &[T; N], c: usize) -> T {
-        let mut z = T::ZERO;
-        for m in 0..self.modes {
-            z += self.observe_mode(x, m, c).0;
-        }
-        z
     }
 
     /// One sample per sensor, in sensor units (`samples[c]`): predict, then
     /// update sensor by sensor. A non-finite sample is refused for that
     /// sensor only.
     pub fn step(&self, state: &mut ModalState<T, N>, samples: &[T]) -> ModalReport {
-        let mut report = ModalReport::default();
-        let saved = state.clone();
-        let ok = match self.filter {
-            Filter::Ekf => self.predict_ekf(state),
-            Filter::Ukf(_) => self.predict_ukf(state),
+        match self.filter {
+            Filter::Ekf => self.step_as::<false>(state, samples),
+            Filter::Ukf(_) => self.step_as::<true>(state, samples),
+        }
+    }
+
+    /// The step of one filter, with the undo: a step that fails leaves the
+    /// estimate, the flags and the outlier run as they were and the
+    /// covariance at its start value.
+    #[inline(always)]
+    fn step_as<const UKF: bool>(&self, state: &mut ModalState<T, N>, samples: &[T]) -> ModalReport {
+        let ModalState {
+            core,
+            anchor,
+            outliers,
+            reacquisitions,
+            ..
+        } = state;
+        let (mut report, ok) = if N < 8 {
+            // One mode: the step runs on a copy that the optimiser keeps in
+            // registers, and the copy is the undo.
+            let mut work = core.clone();
+            let (report, ok) =
+                self.run::<UKF>(&mut work, anchor, outliers, reacquisitions, samples);
+            if ok {
+                *core = work;
+            }
+            (report, ok)
+        } else {
+            // The covariance is reset on undo, so not saved.
+            let (x, faded, run) = (core.x, core.faded, core.run);
+            let (report, ok) = self.run::<UKF>(core, anchor, outliers, reacquisitions, samples);
+            if !ok {
+                core.x = x;
+                core.faded = faded;
+                core.run = run;
+            }
+            (report, ok)
         };
         if !ok {
-            self.repair(state, &saved, &mut report);
-            return report;
+            self.reset(state, &mut report);
         }
-        for c in 0..self.sensors {
+        report
+    }
+
+    /// Counts a repair and resets the covariance.
+    #[cold]
+    fn reset(&self, state: &mut ModalState<T, N>, report: &mut ModalReport) {
+        state.repairs = state.repairs.saturating_add(1);
+        state.core.p = self.start_covariance();
+        report.repaired = true;
+    }
+
+    /// Predict and update; false when the step must be undone (covariance
+    /// not positive definite, innovation variance not positive, or a
+    /// non-finite result).
+    #[inline(always)]
+    fn run<const UKF: bool>(
+        &self,
+        state: &mut Core<T, N>,
+        anchor: &mut [[T; 4]; N],
+        outliers: &mut u32,
+        reacquisitions: &mut u32,
+        samples: &[T],
+    ) -> (ModalReport, bool) {
+        let mut report = ModalReport::default();
+        if UKF {
+            if !self.predict_ukf(state, anchor) {
+                return (report, false);
+            }
+        } else {
+            self.predict_ekf(state, anchor);
+        }
+        for c in 0..self.c_n() {
             let z = samples.get(c).copied().unwrap_or(T::ZERO);
             if !z.is_finite() {
+                cold();
                 report.refused = true;
                 continue;
             }
             let z = z * get(&self.meas_gain, c);
             let mut v = [T::ZERO; N];
-            let Some((zhat, s)) = self.innovation(state, c, &mut v) else {
-                self.repair(state, &saved, &mut report);
-                return report;
+            let Some((zhat, s)) = self.innovation::<UKF>(state, c, &mut v) else {
+                return (report, false);
             };
             let y = z - zhat;
-            let run_over = state.run + 1 >= self.outlier_run;
-            if y * y > self.gate2 * s && !run_over {
-                state.run += 1;
-                state.outliers = state.outliers.saturating_add(1);
-                report.gated += 1;
-                continue;
-            }
             if y * y > self.gate2 * s {
+                cold();
+                if state.run.saturating_add(1) < self.outlier_run {
+                    state.run = state.run.saturating_add(1);
+                    *outliers = outliers.saturating_add(1);
+                    report.gated += 1;
+                    continue;
+                }
                 // A run of outliers: the model lost the signal. Loosen the
                 // amplitudes and take the sample.
                 self.loosen_amplitudes(state, None);
-                state.reacquisitions = state.reacquisitions.saturating_add(1);
+                *reacquisitions = reacquisitions.saturating_add(1);
                 report.reacquired = true;
                 state.run = 0;
-                let Some((zhat, s)) = self.innovation(state, c, &mut v) else {
-                    self.repair(state, &saved, &mut report);
-                    return report;
+                let Some((zhat, s)) = self.innovation::<UKF>(state, c, &mut v) else {
+                    return (report, false);
                 };
                 self.update(state, &v, s, z - zhat);
             } else {
@@ -708,292 +896,539 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         }
         self.constrain(state);
         self.fade(state);
-        let finite = state.x.iter().all(|v| v.is_finite())
-            && state.p.iter().all(|r| r.iter().all(|v| v.is_finite()));
-        if !finite {
-            self.repair(state, &saved, &mut report);
-        }
-        report
+        let ok = all_finite(state);
+        (report, ok)
     }
 
     /// Predicted sample of sensor `c`, cross-covariance into `v` and
     /// innovation variance; `None` when the covariance is not usable.
-    fn innovation(&self, state: &ModalState<T, N>, c: usize, v: &mut [T; N]) -> Option<(T, T)> {
-        let (zhat, s) = match self.filter {
-            Filter::Ekf => self.innovation_ekf(state, c, v),
-            Filter::Ukf(_) => self.innovation_ukf(state, c, v)?,
-        };
-        (s.is_finite() && s > T::ZERO).then_some((zhat, s))
-    }
-
-    fn repair(
+    #[inline(always)]
+    fn innovation<const UKF: bool>(
         &self,
-        state: &mut ModalState<T, N>,
-        saved: &ModalState<T, N>,
-        report: &mut ModalReport,
-    ) {
-        let counters = (state.outliers, state.repairs, state.reacquisitions);
-        *state = saved.clone();
-        state.outliers = counters.0;
-        state.repairs = counters.1.saturating_add(1);
-        state.reacquisitions = counters.2;
-        let fresh = self.start();
-        state.p = fresh.p;
-        report.repaired = true;
+        state: &Core<T, N>,
+        c: usize,
+        v: &mut [T; N],
+    ) -> Option<(T, T)> {
+        let (zhat, s) = if UKF {
+            self.innovation_ukf(state, c, v)?
+        } else {
+            self.innovation_ekf(state, c, v)
+        };
+        // Positive and finite (GUARD: a comparison rather than a test of
+        // the bit pattern).
+        if s > T::ZERO && s < T::GUARD {
+            Some((zhat, s))
+        } else {
+            cold();
+            None
+        }
     }
 
-    /// EKF prediction: x = f(x), P = F P Fᵀ + Q with F applied as row and
-    /// vector operations (F is the identity but for the pair rows).
-    fn predict_ekf(&self, state: &mut ModalState<T, N>) -> bool {
+    /// EKF prediction: x = f(x), P = F P Fᵀ + Q. F is the identity on the
+    /// θ and λ rows; on a pair's rows it holds the rotation `(ec, es)` and
+    /// the derivatives `(-b', a')`, `(a', b')` by θ and λ. First the pair
+    /// rows of F P (whole rows), then their columns on and above the
+    /// diagonal; `P'[θ or λ][pair] = (F P)[pair][θ or λ]` needs no second
+    /// pass. The result is mirrored, so exactly symmetric.
+    #[inline(always)]
+    fn predict_ekf(&self, state: &mut Core<T, N>, anchor: &mut [[T; 4]; N]) {
+        let (m_n, c_n) = (self.m_n(), self.c_n());
+        let Core { x, p, .. } = state;
         let mut rot = [(T::ZERO, T::ZERO); N];
-        for (m, r) in rot.iter_mut().enumerate().take(self.modes) {
-            *r = self.rotation(&state.x, m);
-            self.rotate_mode(&mut state.x, m, *r);
-        }
-        let x = &state.x;
-        let p = &mut state.p;
-        for (m, &(ec, es)) in rot.iter().enumerate().take(self.modes) {
+        for (m, (r, a)) in rot.iter_mut().zip(anchor.iter_mut()).enumerate().take(m_n) {
             let (ti, li) = self.theta_lambda(m);
-            let (row_t, row_l) = (
-                p.get(ti).copied().unwrap_or([T::ZERO; N]),
-                p.get(li).copied().unwrap_or([T::ZERO; N]),
-            );
-            for k in 0..self.sensors {
-                let (ai, bi) = self.pair(m, k);
+            *r = rotation_cached(a, get(x, ti), get(x, li));
+            self.rotate_mode(x, m, *r);
+            let (ec, es) = *r;
+            if N < 8 {
+                // Copies of the rows, read from on and above the diagonal.
+                let (row_t, row_l) = (sym_row(p, ti), sym_row(p, li));
+                for c in 0..c_n {
+                    let (ai, bi) = self.pair(m, c);
+                    let (a1, b1) = (get(x, ai), get(x, bi));
+                    let (ra, rb) = (sym_row(p, ai), sym_row(p, bi));
+                    let (mut na, mut nb) = ([T::ZERO; N], [T::ZERO; N]);
+                    for ((((na, nb), (&pa, &pb)), &pt), &pl) in na
+                        .iter_mut()
+                        .zip(nb.iter_mut())
+                        .zip(ra.iter().zip(&rb))
+                        .zip(&row_t)
+                        .zip(&row_l)
+                    {
+                        *na = ec * pa - es * pb - b1 * pt + a1 * pl;
+                        *nb = es * pa + ec * pb + a1 * pt + b1 * pl;
+                    }
+                    set_row(p, ai, na);
+                    set_row(p, bi, nb);
+                }
+                continue;
+            }
+            // In place: the θ and λ rows come before the pair rows.
+            for c in 0..c_n {
+                let (ai, bi) = self.pair(m, c);
                 let (a1, b1) = (get(x, ai), get(x, bi));
-                // Rows: (F P)[a] = ec P[a] - es P[b] - b' P[θ] + a' P[λ].
-                let (ra, rb) = (
-                    p.get(ai).copied().unwrap_or([T::ZERO; N]),
-                    p.get(bi).copied().unwrap_or([T::ZERO; N]),
-                );
-                let mut na = [T::ZERO; N];
-                let mut nb = [T::ZERO; N];
-                for j in 0..N {
-                    let (pa, pb, pt, pl) =
-                        (get(&ra, j), get(&rb, j), get(&row_t, j), get(&row_l, j));
-                    put(&mut na, j, ec * pa - es * pb - b1 * pt + a1 * pl);
-                    put(&mut nb, j, es * pa + ec * pb + a1 * pt + b1 * pl);
-                }
-                if let Some(r) = p.get_mut(ai) {
-                    *r = na;
-                }
-                if let Some(r) = p.get_mut(bi) {
-                    *r = nb;
+                let Some((head, tail)) = p.split_at_mut_checked(ai) else {
+                    continue;
+                };
+                let (Some(rt), Some(rl), [ra, rb, ..]) = (head.get(ti), head.get(li), tail) else {
+                    continue;
+                };
+                for (((pa, pb), &pt), &pl) in ra.iter_mut().zip(rb.iter_mut()).zip(rt).zip(rl) {
+                    let (va, vb) = (*pa, *pb);
+                    *pa = ec * va - es * vb - b1 * pt + a1 * pl;
+                    *pb = es * va + ec * vb + a1 * pt + b1 * pl;
                 }
             }
         }
-        // Columns: row i of F P Fᵀ is F applied to row i of F P.
-        for row in p.iter_mut() {
-            for (m, &(ec, es)) in rot.iter().enumerate().take(self.modes) {
-                let (ti, li) = self.theta_lambda(m);
-                let (vt, vl) = (get(row, ti), get(row, li));
-                for k in 0..self.sensors {
-                    let (ai, bi) = self.pair(m, k);
-                    let (a1, b1) = (get(x, ai), get(x, bi));
-                    let (va, vb) = (get(row, ai), get(row, bi));
-                    put(row, ai, ec * va - es * vb - b1 * vt + a1 * vl);
-                    put(row, bi, es * va + ec * vb + a1 * vt + b1 * vl);
+        // Columns of the pair rows, on and above the diagonal.
+        for m in 0..m_n {
+            for c in 0..c_n {
+                let (ai, bi) = self.pair(m, c);
+                for i in [ai, bi] {
+                    let Some(r) = p.get_mut(i) else { continue };
+                    for (m2, &(ec, es)) in rot.iter().enumerate().take(m_n) {
+                        let (ti, li) = self.theta_lambda(m2);
+                        let (vt, vl) = (get(r, ti), get(r, li));
+                        for c2 in 0..c_n {
+                            let (aj, bj) = self.pair(m2, c2);
+                            if bj < i {
+                                continue;
+                            }
+                            let (a1, b1) = (get(x, aj), get(x, bj));
+                            let (va, vb) = (get(r, aj), get(r, bj));
+                            if aj >= i {
+                                put(r, aj, ec * va - es * vb - b1 * vt + a1 * vl);
+                            }
+                            put(r, bj, es * va + ec * vb + a1 * vt + b1 * vl);
+                        }
+                    }
+                }
+            }
+        }
+        // Mirror: a pair row holds its final entries on and above the
+        // diagonal; a θ or λ row finds its pair columns below it.
+        for i in 0..N {
+            if N < 8 {
+                for j in i + 1..N {
+                    if self.is_amplitude(i) {
+                        let v = entry(p, i, j);
+                        set(p, j, i, v);
+                    } else if self.is_amplitude(j) {
+                        let v = entry(p, j, i);
+                        set(p, i, j, v);
+                    }
+                }
+                continue;
+            }
+            let Some((top, bottom)) = p.split_at_mut_checked(i + 1) else {
+                continue;
+            };
+            let Some(ri) = top.last_mut() else { continue };
+            let pair_row = self.is_amplitude(i);
+            for (rj, j) in bottom.iter_mut().zip(i + 1..) {
+                if pair_row {
+                    put(rj, i, get(ri, j));
+                } else if self.is_amplitude(j) {
+                    put(ri, j, get(rj, i));
                 }
             }
         }
         self.add_process_noise(state);
-        true
     }
 
-    fn add_process_noise(&self, state: &mut ModalState<T, N>) {
-        for m in 0..self.modes {
+    #[inline(always)]
+    fn add_process_noise(&self, state: &mut Core<T, N>) {
+        for m in 0..self.m_n() {
             let frozen = state.faded.get(m).copied().unwrap_or(false);
             let (ti, li) = self.theta_lambda(m);
             if !frozen {
-                self.add_diag(&mut state.p, ti, self.q_theta);
-                self.add_diag(&mut state.p, li, get(&self.q_lambda, m));
+                add_diag(&mut state.p, ti, self.q_theta);
+                add_diag(&mut state.p, li, get(&self.q_lambda, m));
             }
-            for c in 0..self.sensors {
+            for c in 0..self.c_n() {
                 let (ai, bi) = self.pair(m, c);
-                self.add_diag(&mut state.p, ai, self.q_amp);
-                self.add_diag(&mut state.p, bi, self.q_amp);
+                add_diag(&mut state.p, ai, self.q_amp);
+                add_diag(&mut state.p, bi, self.q_amp);
             }
-        }
-        // Exact symmetry.
-        for i in 0..N {
-            for j in i + 1..N {
-                let v = T::HALF * (entry(&state.p, i, j) + entry(&state.p, j, i));
-                self.set(&mut state.p, i, j, v);
-                self.set(&mut state.p, j, i, v);
-            }
-        }
-    }
-
-    fn add_diag(&self, p: &mut [[T; N]; N], i: usize, q: T) {
-        if let Some(v) = p.get_mut(i).and_then(|r| r.get_mut(i)) {
-            *v += q;
-        }
-    }
-
-    fn set(&self, p: &mut [[T; N]; N], i: usize, j: usize, value: T) {
-        if let Some(v) = p.get_mut(i).and_then(|r| r.get_mut(j)) {
-            *v = value;
         }
     }
 
     /// EKF innovation of sensor `c`: predicted sample, `v = P hᵀ`, and
-    /// `s = h P hᵀ + r`.
-    fn innovation_ekf(&self, state: &ModalState<T, N>, c: usize, v: &mut [T; N]) -> (T, T) {
+    /// `s = h P hᵀ + r`; h has four entries per mode.
+    #[inline(always)]
+    fn innovation_ekf(&self, state: &Core<T, N>, c: usize, v: &mut [T; N]) -> (T, T) {
+        match self.measured.get(c).copied().unwrap_or_default() {
+            Measured::Displacement => self.innovation_ekf_k::<0>(state, c, v),
+            Measured::Velocity => self.innovation_ekf_k::<1>(state, c, v),
+            Measured::Acceleration => self.innovation_ekf_k::<2>(state, c, v),
+        }
+    }
+
+    /// [`Self::innovation_ekf`] for a sensor of derivative order K.
+    #[inline(always)]
+    fn innovation_ekf_k<const K: u8>(
+        &self,
+        state: &Core<T, N>,
+        c: usize,
+        v: &mut [T; N],
+    ) -> (T, T) {
+        let m_n = self.m_n();
+        let mut idx = [0usize; N];
         let mut h = [T::ZERO; N];
         let mut zhat = T::ZERO;
-        for m in 0..self.modes {
-            let (z, g) = self.observe_mode(&state.x, m, c);
-            zhat += z;
+        for m in 0..m_n {
             let (ti, li) = self.theta_lambda(m);
             let (ai, bi) = self.pair(m, c);
-            for (i, gi) in [ti, li, ai, bi].into_iter().zip(g) {
-                put(&mut h, i, gi);
+            let x = &state.x;
+            let (z, g) = observe::<T, K>(get(x, ti), get(x, li), get(x, ai), get(x, bi));
+            zhat += z;
+            for (k, (i, gi)) in [ti, li, ai, bi].into_iter().zip(g).enumerate() {
+                put(&mut idx, 4 * m + k, i);
+                put(&mut h, 4 * m + k, gi);
+            }
+        }
+        let used = 4 * m_n;
+        if N < 8 {
+            for (i, vi) in v.iter_mut().enumerate() {
+                // A copy read from on and above the diagonal.
+                let row = sym_row(&state.p, i);
+                // From the first product, not from zero (0 + x is not folded).
+                let first = get(&row, idx.first().copied().unwrap_or(0)) * get(&h, 0);
+                *vi = idx
+                    .iter()
+                    .zip(&h)
+                    .take(used)
+                    .skip(1)
+                    .fold(first, |acc, (&j, &hj)| acc + get(&row, j) * hj);
+            }
+        } else {
+            // P is symmetric: v is the sum of h_j times row j, whole rows.
+            *v = [T::ZERO; N];
+            for (&j, &hj) in idx.iter().zip(&h).take(used) {
+                if let Some(rj) = state.p.get(j) {
+                    for (vi, &pj) in v.iter_mut().zip(rj) {
+                        *vi += pj * hj;
+                    }
+                }
             }
         }
         let mut s = get(&self.r, c);
-        for (vi, row) in v.iter_mut().zip(&state.p) {
-            *vi = row
-                .iter()
-                .zip(&h)
-                .fold(T::ZERO, |acc, (&pij, &hj)| acc + pij * hj);
-        }
-        for (vi, hi) in v.iter().zip(&h) {
-            s += *vi * *hi;
+        for (&j, &hj) in idx.iter().zip(&h).take(used) {
+            s += get(v, j) * hj;
         }
         (zhat, s)
     }
 
-    /// Lower Cholesky factor of the covariance, times the sigma spread;
-    /// `None` if it is not positive definite.
-    fn sigma_factor(&self, p: &[[T; N]; N]) -> Option<[[T; N]; N]> {
-        let mut l = [[T::ZERO; N]; N];
-        for j in 0..N {
-            let mut d = entry(p, j, j);
-            for k in 0..j {
-                let ljk = entry(&l, j, k);
-                d -= ljk * ljk;
+    /// Factorisation for the sigma points, in the order θ, λ of every mode,
+    /// then the amplitudes: `cols[t]` gets column t of the lower Cholesky
+    /// factor for the 2 modes θ and λ pivots (zero on the states eliminated
+    /// before), `schur` the covariance of the amplitudes given θ and λ,
+    /// `P - Σ_t cols[t] cols[t]ᵀ` (its amplitude block; the rest is
+    /// meaningless), which is all the amplitude columns contribute (see
+    /// `predict_ukf`). The amplitude pivots are still eliminated to check
+    /// that P is positive definite; false if not. `1/√d` per pivot by
+    /// Newton's method, no division.
+    #[inline(always)]
+    fn factor(&self, p: &[[T; N]; N], cols: &mut [[T; N]; N], schur: &mut [[T; N]; N]) -> bool {
+        if N < 8 {
+            return factor_natural(p, cols, schur);
+        }
+        // Permuted to the pivot order and factored right-looking: after
+        // pivot t the rows below hold the Schur complement on and below the
+        // diagonal (what lies elsewhere is never read). Whole-row updates
+        // (the column's zeros leave the eliminated part alone) unroll and
+        // need no bounds per entry.
+        let k_n = 2 * self.m_n();
+        let mut w = [[T::ZERO; N]; N];
+        for (i, row) in w.iter_mut().enumerate() {
+            let pi = self.pivot(i);
+            for (j, v) in row.iter_mut().enumerate().take(i + 1) {
+                *v = entry(p, pi, self.pivot(j));
             }
-            if !d.is_finite() || d <= T::ZERO {
-                return None;
+        }
+        for t in 0..N {
+            let d = entry(&w, t, t);
+            if !pivot_ok(d) {
+                return false;
             }
-            let ljj = d.sqrt();
-            let inv = T::ONE / ljj;
-            self.set(&mut l, j, j, ljj);
-            for i in j + 1..N {
-                let mut v = entry(p, i, j);
-                for k in 0..j {
-                    v -= entry(&l, i, k) * entry(&l, j, k);
+            if t + 1 == N {
+                break;
+            }
+            let r = rsqrt(d);
+            let mut l = [T::ZERO; N];
+            for (li, row) in l.iter_mut().zip(&w).skip(t + 1) {
+                *li = get(row, t) * r;
+            }
+            for (row, &li) in w.iter_mut().zip(&l).skip(t + 1) {
+                for (v, &lj) in row.iter_mut().zip(&l) {
+                    *v -= li * lj;
                 }
-                self.set(&mut l, i, j, v * inv);
+            }
+            if t < k_n {
+                if let Some(col) = cols.get_mut(t) {
+                    *col = [T::ZERO; N];
+                    put(col, self.pivot(t), d * r);
+                    for (i, &li) in l.iter().enumerate().skip(t + 1) {
+                        put(col, self.pivot(i), li);
+                    }
+                }
+                if t + 1 == k_n {
+                    for (i, row) in w.iter().enumerate().skip(k_n) {
+                        let pi = self.pivot(i);
+                        for (j, &v) in row.iter().enumerate().take(i + 1).skip(k_n) {
+                            let pj = self.pivot(j);
+                            set(schur, pi, pj, v);
+                            set(schur, pj, pi, v);
+                        }
+                    }
+                }
             }
         }
-        let g = self.ut.0;
-        for row in l.iter_mut() {
-            for v in row.iter_mut() {
-                *v *= g;
-            }
-        }
-        Some(l)
+        true
     }
 
-    /// Sigma point `x ± column j of L`.
-    fn sigma(&self, x: &[T; N], l: &[[T; N]; N], j: usize, sign: T) -> [T; N] {
-        let mut out = *x;
-        for (i, o) in out.iter_mut().enumerate() {
-            *o += sign * entry(l, i, j);
-        }
-        out
-    }
-
-    fn predict_ukf(&self, state: &mut ModalState<T, N>) -> bool {
-        let Some(l) = self.sigma_factor(&state.p) else {
+    /// UKF prediction. With θ and λ factored first, the sigma points of the
+    /// amplitude columns `x ± γ l_t` share the centre's θ and λ, so the
+    /// process moves them linearly: `f(x) ± γ R l_t`, R the centre's
+    /// rotations. Their 2(n - 2 modes) points then add `2 W_i` times the
+    /// centre's deviation each (folded into the centre weights) and, as
+    /// `2 W_i γ² = 1`, exactly `R S Rᵀ` to the covariance, S the amplitude
+    /// covariance given θ and λ. Only the 4 modes points of the θ and λ
+    /// columns go through the rotation polynomials. The result is the scaled
+    /// unscented transform with this square root of P, not an approximation.
+    #[inline(always)]
+    fn predict_ukf(&self, state: &mut Core<T, N>, anchor: &mut [[T; 4]; N]) -> bool {
+        let mut cols = [[T::ZERO; N]; N];
+        let mut schur = [[T::ZERO; N]; N];
+        if !self.factor(&state.p, &mut cols, &mut schur) {
             return false;
-        };
-        let (_, w0m, w0c, wi) = self.ut;
-        let mut x0 = state.x;
-        self.process(&mut x0);
+        }
+        let (m_n, k_n) = (self.m_n(), 2 * self.m_n());
+        let w = self.ut;
+        let x = state.x;
+        let mut rot = [(T::ZERO, T::ZERO); N];
+        let mut f0 = x;
+        for (m, (r, a)) in rot.iter_mut().zip(anchor.iter_mut()).enumerate().take(m_n) {
+            let (ti, li) = self.theta_lambda(m);
+            *r = rotation_cached(a, get(&x, ti), get(&x, li));
+            self.rotate_mode(&mut f0, m, *r);
+        }
+        // The θ and λ columns: column t is zero on the θ and λ of the
+        // modes before mode t/2, whose rotation is then the centre's.
         let mut plus = [[T::ZERO; N]; N];
         let mut minus = [[T::ZERO; N]; N];
+        for (t, ((l, xp), xm)) in cols
+            .iter()
+            .zip(plus.iter_mut())
+            .zip(minus.iter_mut())
+            .take(k_n)
+            .enumerate()
+        {
+            for (((p, n), &xi), &li) in xp.iter_mut().zip(xm.iter_mut()).zip(&x).zip(l) {
+                let d = w.spread * li;
+                *p = xi + d;
+                *n = xi - d;
+            }
+            for (m, &r) in rot.iter().enumerate().take(m_n) {
+                let (rp, rn) = if 2 * m + 1 >= t {
+                    let (ti, li) = self.theta_lambda(m);
+                    let g = w.spread;
+                    let [rp, rn] =
+                        rotation_pair(get(&x, ti), get(&x, li), g * get(l, ti), g * get(l, li), r);
+                    (rp, rn)
+                } else {
+                    (r, r)
+                };
+                self.rotate_mode(xp, m, rp);
+                self.rotate_mode(xm, m, rn);
+            }
+        }
         let mut mean = [T::ZERO; N];
         for (i, m) in mean.iter_mut().enumerate() {
-            *m = w0m * get(&x0, i);
+            let mut acc = T::ZERO;
+            for (xp, xm) in plus.iter().zip(&minus).take(k_n) {
+                acc += get(xp, i) + get(xm, i);
+            }
+            *m = w.centre_mean * get(&f0, i) + w.wi * acc;
         }
-        for j in 0..N {
-            let mut xp = self.sigma(&state.x, &l, j, T::ONE);
-            let mut xm = self.sigma(&state.x, &l, j, -T::ONE);
-            self.process(&mut xp);
-            self.process(&mut xm);
-            for ((m, a), b) in mean.iter_mut().zip(&xp).zip(&xm) {
-                *m += wi * (*a + *b);
-            }
-            if let Some(r) = plus.get_mut(j) {
-                *r = xp;
-            }
-            if let Some(r) = minus.get_mut(j) {
-                *r = xm;
+        let mut d0 = f0;
+        for (d, m) in d0.iter_mut().zip(&mean) {
+            *d -= *m;
+        }
+        for (xp, xm) in plus.iter_mut().zip(minus.iter_mut()).take(k_n) {
+            for ((p, n), m) in xp.iter_mut().zip(xm.iter_mut()).zip(&mean) {
+                *p -= *m;
+                *n -= *m;
             }
         }
-        let mut p = [[T::ZERO; N]; N];
+        let p = &mut state.p;
         for i in 0..N {
-            for k in i..N {
-                let d0 = (get(&x0, i) - get(&mean, i)) * (get(&x0, k) - get(&mean, k));
-                let mut acc = T::ZERO;
-                for (xp, xm) in plus.iter().zip(&minus) {
-                    acc += (get(xp, i) - get(&mean, i)) * (get(xp, k) - get(&mean, k))
-                        + (get(xm, i) - get(&mean, i)) * (get(xm, k) - get(&mean, k));
+            let di = get(&d0, i);
+            for j in 0..N {
+                if j < i {
+                    continue;
                 }
-                let v = w0c * d0 + wi * acc;
-                self.set(&mut p, i, k, v);
-                self.set(&mut p, k, i, v);
+                let mut acc = T::ZERO;
+                for (xp, xm) in plus.iter().zip(&minus).take(k_n) {
+                    acc += get(xp, i) * get(xp, j) + get(xm, i) * get(xm, j);
+                }
+                let v = w.centre_cov * di * get(&d0, j) + w.wi * acc;
+                set(p, i, j, v);
+                set(p, j, i, v);
             }
         }
+        self.add_rotated(p, &schur, &rot);
         state.x = mean;
-        state.p = p;
         self.add_process_noise(state);
         true
     }
 
+    /// `p += R S Rᵀ` on the amplitude block, R the rotation of each mode's
+    /// pairs: first the rows, then the columns on and above the diagonal,
+    /// mirrored.
+    #[inline(always)]
+    fn add_rotated(&self, p: &mut [[T; N]; N], s: &[[T; N]; N], rot: &[(T, T); N]) {
+        let (m_n, c_n) = (self.m_n(), self.c_n());
+        let mut rs = [[T::ZERO; N]; N];
+        for (m, &(ec, es)) in rot.iter().enumerate().take(m_n) {
+            for c in 0..c_n {
+                let (ai, bi) = self.pair(m, c);
+                let (sa, sb) = (sym_row(s, ai), sym_row(s, bi));
+                let (mut na, mut nb) = ([T::ZERO; N], [T::ZERO; N]);
+                for (j, (na, nb)) in na.iter_mut().zip(nb.iter_mut()).enumerate() {
+                    if self.is_amplitude(j) {
+                        let (va, vb) = (get(&sa, j), get(&sb, j));
+                        *na = ec * va - es * vb;
+                        *nb = es * va + ec * vb;
+                    }
+                }
+                set_row(&mut rs, ai, na);
+                set_row(&mut rs, bi, nb);
+            }
+        }
+        for m in 0..m_n {
+            for c in 0..c_n {
+                let (ai, bi) = self.pair(m, c);
+                for i in [ai, bi] {
+                    let r = row(&rs, i);
+                    for (m2, &(ec, es)) in rot.iter().enumerate().take(m_n) {
+                        for c2 in 0..c_n {
+                            let (aj, bj) = self.pair(m2, c2);
+                            if bj < i {
+                                continue;
+                            }
+                            let (va, vb) = (get(&r, aj), get(&r, bj));
+                            if aj >= i {
+                                let v = entry(p, i, aj) + (ec * va - es * vb);
+                                set(p, i, aj, v);
+                                set(p, aj, i, v);
+                            }
+                            let v = entry(p, i, bj) + (es * va + ec * vb);
+                            set(p, i, bj, v);
+                            set(p, bj, i, v);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// UKF innovation of sensor `c` with sigma points redrawn from the
-    /// current estimate: predicted sample, `v = Pxz`, `s = Pzz + r`.
-    fn innovation_ukf(&self, state: &ModalState<T, N>, c: usize, v: &mut [T; N]) -> Option<(T, T)> {
-        let l = self.sigma_factor(&state.p)?;
-        let (_, w0m, w0c, wi) = self.ut;
-        let z0 = self.observe(&state.x, c);
+    /// current estimate: predicted sample, `v = Pxz`, `s = Pzz + r`. As in
+    /// the prediction, the amplitude columns see the sensor's linear
+    /// coefficients H at the centre (`z = H x` for fixed θ, λ) and add
+    /// exactly `H S Hᵀ` to Pzz and `S Hᵀ` to Pxz; only the θ and λ columns
+    /// are observed point by point.
+    #[inline(always)]
+    fn innovation_ukf(&self, state: &Core<T, N>, c: usize, v: &mut [T; N]) -> Option<(T, T)> {
+        let mut cols = [[T::ZERO; N]; N];
+        let mut schur = [[T::ZERO; N]; N];
+        if !self.factor(&state.p, &mut cols, &mut schur) {
+            return None;
+        }
+        let (m_n, k_n) = (self.m_n(), 2 * self.m_n());
+        let w = self.ut;
+        let x = &state.x;
+        let mut h = [(T::ZERO, T::ZERO); N];
+        let mut z0 = T::ZERO;
+        for (m, hm) in h.iter_mut().enumerate().take(m_n) {
+            let (ti, li) = self.theta_lambda(m);
+            let (ai, bi) = self.pair(m, c);
+            *hm = self.coefficients(c, get(x, ti), get(x, li));
+            z0 += hm.0 * get(x, ai) + hm.1 * get(x, bi);
+        }
         let mut zp = [T::ZERO; N];
         let mut zm = [T::ZERO; N];
-        let mut zhat = w0m * z0;
-        for j in 0..N {
-            let a = self.observe(&self.sigma(&state.x, &l, j, T::ONE), c);
-            let b = self.observe(&self.sigma(&state.x, &l, j, -T::ONE), c);
-            zhat += wi * (a + b);
-            put(&mut zp, j, a);
-            put(&mut zm, j, b);
-        }
-        let mut s = w0c * (z0 - zhat) * (z0 - zhat) + get(&self.r, c);
-        for (a, b) in zp.iter().zip(&zm) {
-            s += wi * ((*a - zhat) * (*a - zhat) + (*b - zhat) * (*b - zhat));
-        }
-        // Pxz = Σ W_i (±L_j)(Z_j^± - ẑ) = W_i Σ L_j (Z_j^+ - Z_j^-).
-        for (i, vi) in v.iter_mut().enumerate() {
-            let mut acc = T::ZERO;
-            for (j, (a, b)) in zp.iter().zip(&zm).enumerate() {
-                acc += entry(&l, i, j) * (*a - *b);
+        let mut sum = T::ZERO;
+        for ((l, zp), zm) in cols.iter().zip(zp.iter_mut()).zip(zm.iter_mut()).take(k_n) {
+            let (mut a, mut b) = (T::ZERO, T::ZERO);
+            for m in 0..m_n {
+                let (ti, li) = self.theta_lambda(m);
+                let (ai, bi) = self.pair(m, c);
+                let g = w.spread;
+                let (dt, dl) = (g * get(l, ti), g * get(l, li));
+                let (da, db) = (g * get(l, ai), g * get(l, bi));
+                let (t0, l0, a0, b0) = (get(x, ti), get(x, li), get(x, ai), get(x, bi));
+                let (hp, hq) = self.coefficients(c, t0 + dt, l0 + dl);
+                a += hp * (a0 + da) + hq * (b0 + db);
+                let (hp, hq) = self.coefficients(c, t0 - dt, l0 - dl);
+                b += hp * (a0 - da) + hq * (b0 - db);
             }
-            *vi = wi * acc;
+            *zp = a;
+            *zm = b;
+            sum += a + b;
+        }
+        let zhat = w.centre_mean * z0 + w.wi * sum;
+        // u = S Hᵀ (amplitude rows), then H S Hᵀ.
+        let mut u = [T::ZERO; N];
+        for (i, ui) in u.iter_mut().enumerate() {
+            if !self.is_amplitude(i) {
+                continue;
+            }
+            let r = sym_row(&schur, i);
+            let mut acc = T::ZERO;
+            for (m, &(hp, hq)) in h.iter().enumerate().take(m_n) {
+                let (ai, bi) = self.pair(m, c);
+                acc += hp * get(&r, ai) + hq * get(&r, bi);
+            }
+            *ui = acc;
+        }
+        let dz = z0 - zhat;
+        let mut s = w.centre_cov * dz * dz + get(&self.r, c);
+        for (m, &(hp, hq)) in h.iter().enumerate().take(m_n) {
+            let (ai, bi) = self.pair(m, c);
+            s += hp * get(&u, ai) + hq * get(&u, bi);
+        }
+        let mut spread = T::ZERO;
+        for (a, b) in zp.iter().zip(&zm).take(k_n) {
+            let (da, db) = (*a - zhat, *b - zhat);
+            spread += da * da + db * db;
+        }
+        s += w.wi * spread;
+        // Pxz = W_i γ Σ_t l_t (Z_t^+ - Z_t^-) over θ and λ columns, + S Hᵀ.
+        for (i, (vi, ui)) in v.iter_mut().zip(&u).enumerate() {
+            let mut acc = T::ZERO;
+            for ((l, a), b) in cols.iter().zip(&zp).zip(&zm).take(k_n) {
+                acc += get(l, i) * (*a - *b);
+            }
+            *vi = w.wi_spread * acc + *ui;
         }
         Some((zhat, s))
     }
 
     /// Scalar update with cross-covariance `v`, innovation variance `s` and
-    /// innovation `y`, in the Joseph form (valid for the frozen rows' zero
-    /// gain).
-    fn update(&self, state: &mut ModalState<T, N>, v: &[T; N], s: T, y: T) {
+    /// innovation `y`, in the Joseph form `P - K vᵀ - v Kᵀ + s K Kᵀ`
+    /// (valid for the frozen rows' zero gain), as `P + K uᵀ - v Kᵀ` with
+    /// `u = s K - v` (zero but for rounding where the gain is not frozen),
+    /// on and above the diagonal, mirrored.
+    #[inline(always)]
+    fn update(&self, state: &mut Core<T, N>, v: &[T; N], s: T, y: T) {
         let inv = T::ONE / s;
         let mut k = [T::ZERO; N];
         for (ki, vi) in k.iter_mut().zip(v) {
             *ki = *vi * inv;
         }
-        for m in 0..self.modes {
+        for m in 0..self.m_n() {
             if state.faded.get(m).copied().unwrap_or(false) {
                 let (ti, li) = self.theta_lambda(m);
                 put(&mut k, ti, T::ZERO);
@@ -1003,31 +1438,59 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         for (xi, ki) in state.x.iter_mut().zip(&k) {
             *xi += *ki * y;
         }
-        for i in 0..N {
-            let (ki, vi) = (get(&k, i), get(v, i));
-            for j in i..N {
-                let (kj, vj) = (get(&k, j), get(v, j));
-                let val = entry(&state.p, i, j) - ki * vj - vi * kj + s * ki * kj;
-                self.set(&mut state.p, i, j, val);
-                self.set(&mut state.p, j, i, val);
+        let mut u = [T::ZERO; N];
+        for ((ui, ki), vi) in u.iter_mut().zip(&k).zip(v) {
+            *ui = s * *ki - *vi;
+        }
+        let p = &mut state.p;
+        if N < 8 {
+            // Fully unrolled: every entry a register.
+            for i in 0..N {
+                let (ki, vi) = (get(&k, i), get(v, i));
+                for j in i..N {
+                    let (kj, uj) = (get(&k, j), get(&u, j));
+                    let val = entry(p, i, j) + ki * uj - vi * kj;
+                    set(p, i, j, val);
+                    set(p, j, i, val);
+                }
+            }
+            return;
+        }
+        for (i, (row, (&ki, &vi))) in p.iter_mut().zip(k.iter().zip(v)).enumerate() {
+            let (Some(r), Some(kt), Some(ut)) = (row.get_mut(i..), k.get(i..), u.get(i..)) else {
+                continue;
+            };
+            for ((pij, &kj), &uj) in r.iter_mut().zip(kt).zip(ut) {
+                *pij = *pij + ki * uj - vi * kj;
             }
         }
+        mirror_upper(p);
     }
 
     /// θ and λ into their bands, the diagonal above its floor.
-    fn constrain(&self, state: &mut ModalState<T, N>) {
-        for m in 0..self.modes {
+    #[inline(always)]
+    fn constrain(&self, state: &mut Core<T, N>) {
+        for m in 0..self.m_n() {
             let (ti, li) = self.theta_lambda(m);
-            let t = get(&state.x, ti).max(self.theta_min).min(self.theta_max);
-            put(&mut state.x, ti, t);
-            let l = get(&state.x, li).max(self.lambda_min).min(self.lambda_max);
-            put(&mut state.x, li, l);
+            // One comparison each when well inside the band (NaN fails it).
+            let t = get(&state.x, ti);
+            let inside = (t - self.theta_mid).abs() <= self.theta_half;
+            if !inside {
+                cold();
+                put(&mut state.x, ti, clamp(t, self.theta_min, self.theta_max));
+            }
+            let l = get(&state.x, li);
+            let inside = l.abs() <= self.lambda_half;
+            if !inside {
+                cold();
+                put(&mut state.x, li, clamp(l, self.lambda_min, self.lambda_max));
+            }
         }
-        for i in 0..N {
-            let floor = get(&self.floor, i);
-            if let Some(v) = state.p.get_mut(i).and_then(|r| r.get_mut(i))
+        for (i, (row, &floor)) in state.p.iter_mut().zip(&self.floor).enumerate() {
+            if let Some(v) = row.get_mut(i)
                 && *v < floor
             {
+                cold();
                 *v = floor;
             }
         }
@@ -1035,25 +1498,43 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
 
     /// Marks modes faded or back, keeps a faded mode's amplitudes loose and
     /// gives a returning mode's ω and σ their start uncertainty.
-    fn fade(&self, state: &mut ModalState<T, N>) {
-        for m in 0..self.modes {
+    #[inline(always)]
+    fn fade(&self, state: &mut Core<T, N>) {
+        for m in 0..self.m_n() {
             let (ti, li) = self.theta_lambda(m);
             let (t, l) = (get(&state.x, ti), get(&state.x, li));
             let rate2 = t * t + l * l;
-            let (mut below, mut above) = (true, false);
-            for c in 0..self.sensors {
+            let was = state.faded.get(m).copied().unwrap_or(false);
+            // Faded: stays so unless above the upper threshold at a sensor;
+            // not faded: fades when below the lower one at every sensor.
+            let mut now = true;
+            for c in 0..self.c_n() {
+                if !was && !now {
+                    break;
+                }
                 let (ai, bi) = self.pair(m, c);
                 let (a, b) = (get(&state.x, ai), get(&state.x, bi));
                 let mut amp2 = a * a + b * b;
-                for _ in 0..self.measured_order(c) {
-                    amp2 *= rate2;
+                match self.measured.get(c).copied().unwrap_or_default() {
+                    Measured::Displacement => {}
+                    Measured::Velocity => amp2 *= rate2,
+                    Measured::Acceleration => {
+                        amp2 *= rate2;
+                        amp2 *= rate2;
+                    }
                 }
-                let noise2 = self.fade2 * get(&self.r, c);
-                below &= amp2 < noise2;
-                above |= amp2 > (T::ONE + T::ONE + T::ONE + T::ONE) * noise2;
+                let still = if was {
+                    let above = amp2 > get(&self.fade_above, c);
+                    !above
+                } else {
+                    amp2 < get(&self.fade_below, c)
+                };
+                now &= still;
             }
-            let was = state.faded.get(m).copied().unwrap_or(false);
-            let now = if was { !above } else { below };
+            if !now && !was {
+                continue;
+            }
+            cold();
             put(&mut state.faded, m, now);
             if now {
                 self.loosen_amplitudes(state, Some(m));
@@ -1068,12 +1549,13 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
 
     /// Raises the amplitude variances of mode `m` (or of every mode) to their
     /// start values and drops their correlations.
-    fn loosen_amplitudes(&self, state: &mut ModalState<T, N>, mode: Option<usize>) {
-        for m in 0..self.modes {
+    #[inline(always)]
+    fn loosen_amplitudes(&self, state: &mut Core<T, N>, mode: Option<usize>) {
+        for m in 0..self.m_n() {
             if mode.is_some_and(|x| x != m) {
                 continue;
             }
-            for c in 0..self.sensors {
+            for c in 0..self.c_n() {
                 let (ai, bi) = self.pair(m, c);
                 self.loosen(state, ai);
                 self.loosen(state, bi);
@@ -1083,17 +1565,307 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
 
     /// Raises the variance of state `i` to its start value, if below, and
     /// drops its correlations.
-    fn loosen(&self, state: &mut ModalState<T, N>, i: usize) {
+    #[inline(always)]
+    fn loosen(&self, state: &mut Core<T, N>, i: usize) {
         let p0 = get(&self.p0, i);
         if entry(&state.p, i, i) < p0 {
             for j in 0..N {
                 if j != i {
-                    self.set(&mut state.p, i, j, T::ZERO);
-                    self.set(&mut state.p, j, i, T::ZERO);
+                    set(&mut state.p, i, j, T::ZERO);
+                    set(&mut state.p, j, i, T::ZERO);
                 }
             }
-            self.set(&mut state.p, i, i, p0);
+            set(&mut state.p, i, i, p0);
         }
+    }
+}
+
+/// Predicted sample of a sensor of derivative order K (scaled) from one
+/// mode with phase step `t`, log-decay `l` and pair `(a, b)`, and its
+/// gradient by (θ, λ, a, b): the real part of `(l + i t)^K (a + i b)`.
+#[inline(always)]
+fn observe<T: Real, const K: u8>(t: T, l: T, a: T, b: T) -> (T, [T; 4]) {
+    let two = T::ONE + T::ONE;
+    match K {
+        0 => (a, [T::ZERO, T::ZERO, T::ONE, T::ZERO]),
+        1 => (l * a - t * b, [-b, a, l, -t]),
+        _ => {
+            let (ca, cb) = (l * l - t * t, -two * l * t);
+            (
+                ca * a + cb * b,
+                [-two * (t * a + l * b), two * (l * a - t * b), ca, cb],
+            )
+        }
+    }
+}
+
+/// `(e^λ cos θ, e^λ sin θ)`: one sin/cos polynomial and one exponential.
+#[inline(always)]
+fn rotation<T: Real>(theta: T, lambda: T) -> (T, T) {
+    let (s, c) = sin_cos(theta);
+    let e = exp_small(lambda);
+    (e * c, e * s)
+}
+
+/// [`ModalTracker::factor`] for one mode, whose θ and λ come first: the
+/// plain right-looking Cholesky order, with loops the optimiser unrolls.
+#[inline(always)]
+fn factor_natural<T: Real, const N: usize>(
+    p: &[[T; N]; N],
+    cols: &mut [[T; N]; N],
+    schur: &mut [[T; N]; N],
+) -> bool {
+    let mut w = *p;
+    for t in 0..N {
+        let d = entry(&w, t, t);
+        if !pivot_ok(d) {
+            return false;
+        }
+        if t + 1 == N {
+            break;
+        }
+        let r = rsqrt(d);
+        // Constant trip counts and masks, so that the loops unroll.
+        let mut l = [T::ZERO; N];
+        for (i, li) in l.iter_mut().enumerate() {
+            if i > t {
+                *li = entry(&w, i, t) * r;
+            }
+        }
+        for i in 0..N {
+            let li = get(&l, i);
+            for j in 0..N {
+                if i > t && j >= i {
+                    let v = entry(&w, i, j) - li * get(&l, j);
+                    set(&mut w, i, j, v);
+                    set(&mut w, j, i, v);
+                }
+            }
+        }
+        if t < 2 {
+            put(&mut l, t, d * r);
+            if let Some(col) = cols.get_mut(t) {
+                *col = l;
+            }
+            if t == 1 {
+                *schur = w;
+            }
+        }
+    }
+    true
+}
+
+/// A usable pivot: positive (and normal, for [`rsqrt`]) and below GUARD
+/// (finite; a larger variance of these scaled states is a diverged filter).
+#[inline(always)]
+fn pivot_ok<T: Real>(d: T) -> bool {
+    d > min_positive::<T>() && d < T::GUARD
+}
+
+/// Rotations `e^(λ ± δλ) (cos(θ ± δθ), sin(θ ± δθ))` of a pair of sigma
+/// points from the centre's `(ec, es)`: `e^(±d)`, `d = δλ + iδθ`, from the
+/// even and odd parts of its series, `1 + d²/2 + d⁴/24` and `d + d³/6`, when
+/// `f32` and |δθ| + |δλ| <= 1/32 (truncation below |d|⁵/120 = 2.6e-10,
+/// under the rounding) and θ - δθ >= 0 (θ + δθ stays below π, as θ <=
+/// 0.99 π); else by the polynomials, which clamp θ into [0, π].
+#[inline(always)]
+fn rotation_pair<T: Real>(theta: T, lambda: T, dt: T, dl: T, (ec, es): (T, T)) -> [(T, T); 2] {
+    let adt = dt.abs();
+    if is_f32::<T>() && adt + dl.abs() <= T::from_f64(1.0 / 32.0) && adt <= theta {
+        let (d2r, d2i) = (dl * dl - dt * dt, (dl + dl) * dt);
+        let (d4r, d4i) = (d2r * d2r - d2i * d2i, (d2r + d2r) * d2i);
+        let c = |k: f64| T::from_f64(1.0 / k);
+        let (er, ei) = (
+            T::ONE + (T::HALF * d2r + c(24.0) * d4r),
+            T::HALF * d2i + c(24.0) * d4i,
+        );
+        let (qr, qi) = (T::ONE + c(6.0) * d2r, c(6.0) * d2i);
+        let (or, oi) = (dl * qr - dt * qi, dl * qi + dt * qr);
+        let turn = |(ar, ai): (T, T)| (ec * ar - es * ai, ec * ai + es * ar);
+        [turn((er + or, ei + oi)), turn((er - or, ei - oi))]
+    } else {
+        rotation_pair_far(theta, lambda, dt, dl)
+    }
+}
+
+/// [`rotation_pair`] by the polynomials (out of line: rare once the filter
+/// has converged, and it keeps the callers' loops small enough to unroll).
+#[cold]
+#[inline(never)]
+fn rotation_pair_far<T: Real>(theta: T, lambda: T, dt: T, dl: T) -> [(T, T); 2] {
+    [
+        rotation(theta + dt, lambda + dl),
+        rotation(theta - dt, lambda - dl),
+    ]
+}
+
+/// Radius in |Δθ| + |Δλ| within which a rotation is taken from an anchor.
+const ANCHOR_RADIUS: f64 = 1.0 / 1024.0;
+
+/// The anchor `[θa, λa, e^λa cos θa, e^λa sin θa]` at an estimate's (θ, λ);
+/// θa is NaN (no point is near it) below twice the radius, where a sigma
+/// point near it could have a negative θ, which [`rotation`] clamps.
+#[inline(always)]
+fn anchor_at<T: Real>(theta: T, lambda: T) -> [T; 4] {
+    let (c, s) = rotation_in_range(theta, lambda);
+    let ta = if theta >= T::from_f64(2.0 * ANCHOR_RADIUS) {
+        theta
+    } else {
+        T::from_f64(f64::NAN)
+    };
+    [ta, lambda, c, s]
+}
+
+/// [`anchor_at`] out of line, for the rare refresh.
+#[cold]
+#[inline(never)]
+fn anchor_far<T: Real>(theta: T, lambda: T) -> [T; 4] {
+    anchor_at(theta, lambda)
+}
+
+/// `(e^λ cos θ, e^λ sin θ)` in `f32` from an anchor when (θ, λ) is within
+/// `ANCHOR_RADIUS` of it: `e^(λ + iθ) = e^(λa + iθa) e^d` with
+/// `d = Δλ + iΔθ` and `e^d = 1 + d + d²/2` (the next term, below
+/// |d|³/6 = 1.6e-10, is under the rounding of `f32`). About 12
+/// instructions instead of about 50 for the polynomials. `None` farther
+/// away and for other types.
+#[inline(always)]
+fn rotation_near<T: Real>(anchor: &[T; 4], theta: T, lambda: T) -> Option<(T, T)> {
+    if !is_f32::<T>() {
+        return None;
+    }
+    let [ta, la, ca, sa] = *anchor;
+    let (dt, dl) = (theta - ta, lambda - la);
+    let near = dt.abs() + dl.abs() <= T::from_f64(ANCHOR_RADIUS);
+    if !near {
+        return None;
+    }
+    let er = dl + T::HALF * (dl * dl - dt * dt);
+    let ei = dt + dl * dt;
+    Some((ca + (ca * er - sa * ei), sa + (ca * ei + sa * er)))
+}
+
+/// The rotation of an estimate's (θ, λ): from the mode's anchor when near
+/// it, else by the polynomials, which become the new anchor.
+#[inline(always)]
+fn rotation_cached<T: Real>(anchor: &mut [T; 4], theta: T, lambda: T) -> (T, T) {
+    if let Some(r) = rotation_near(anchor, theta, lambda) {
+        return r;
+    }
+    let a = anchor_far(theta, lambda);
+    *anchor = a;
+    let [_, _, c, s] = a;
+    (c, s)
+}
+
+/// The same for an estimate's θ, which [`ModalTracker::step`] keeps in
+/// (0, θ_max] ⊂ (0, π).
+#[inline(always)]
+fn rotation_in_range<T: Real>(theta: T, lambda: T) -> (T, T) {
+    let (s, c) = sin_cos_in_range(theta);
+    let e = exp_small(lambda);
+    (e * c, e * s)
+}
+
+/// True when the estimate and the covariance are finite: their sum is,
+/// unless a huge finite entry overflowed it, which the entry-wise check
+/// then tells apart.
+#[inline(always)]
+fn all_finite<T: Real, const N: usize>(state: &Core<T, N>) -> bool {
+    let mut acc = state.x.first().copied().unwrap_or(T::ZERO);
+    for v in state.x.iter().skip(1) {
+        acc += *v;
+    }
+    for (i, row) in state.p.iter().enumerate() {
+        if N < 8 {
+            for v in row.iter().skip(i) {
+                acc += *v;
+            }
+        } else {
+            for v in row.get(i..).unwrap_or(&[]) {
+                acc += *v;
+            }
+        }
+    }
+    acc.is_finite()
+        || (state.x.iter().all(|v| v.is_finite())
+            && state.p.iter().all(|r| r.iter().all(|v| v.is_finite())))
+}
+
+/// Marks the path that calls it as rare, so that the optimiser branches
+/// around it rather than computing it into selects.
+#[cold]
+#[inline(never)]
+fn cold() {}
+
+/// `v.max(lo).min(hi)` for `lo <= hi` (NaN gives `lo`) by comparisons:
+/// `f32::max` is a libm call on a Cortex-M4F.
+#[inline(always)]
+pub(crate) fn clamp<T: Real>(v: T, lo: T, hi: T) -> T {
+    if v >= lo {
+        if v > hi { hi } else { v }
+    } else {
+        lo
+    }
+}
+
+/// Row i of a matrix.
+#[inline(always)]
+fn row<T: Real, const N: usize>(p: &[[T; N]; N], i: usize) -> [T; N] {
+    p.get(i).copied().unwrap_or([T::ZERO; N])
+}
+
+/// Row i of a symmetric matrix; below 8 states read from the entries on
+/// and above the diagonal (fewer loads once the step is inlined).
+#[inline(always)]
+fn sym_row<T: Real, const N: usize>(p: &[[T; N]; N], i: usize) -> [T; N] {
+    if N < 8 {
+        let mut r = [T::ZERO; N];
+        for (j, v) in r.iter_mut().enumerate() {
+            *v = entry(p, i.min(j), i.max(j));
+        }
+        r
+    } else {
+        p.get(i).copied().unwrap_or([T::ZERO; N])
+    }
+}
+
+#[inline(always)]
+fn set_row<T, const N: usize>(p: &mut [[T; N]; N], i: usize, r: [T; N]) {
+    if let Some(dst) = p.get_mut(i) {
+        *dst = r;
+    }
+}
+
+/// Copies the entries above the diagonal to those below it.
+#[inline(always)]
+fn mirror_upper<T: Copy, const N: usize>(p: &mut [[T; N]; N]) {
+    for i in 1..N {
+        let Some((top, bottom)) = p.split_at_mut_checked(i) else {
+            continue;
+        };
+        let Some(ri) = bottom.first_mut() else {
+            continue;
+        };
+        for (dst, rj) in ri.iter_mut().zip(top.iter()) {
+            if let Some(&v) = rj.get(i) {
+                *dst = v;
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn set<T, const N: usize>(p: &mut [[T; N]; N], i: usize, j: usize, value: T) {
+    if let Some(v) = p.get_mut(i).and_then(|r| r.get_mut(j)) {
+        *v = value;
+    }
+}
+
+#[inline(always)]
+fn add_diag<T: Real, const N: usize>(p: &mut [[T; N]; N], i: usize, q: T) {
+    if let Some(v) = p.get_mut(i).and_then(|r| r.get_mut(i)) {
+        *v += q;
     }
 }
 
@@ -1207,5 +1979,411 @@ mod tests {
             assert_eq!(r.gated, 1);
             assert_eq!(tr.mode(&s, 0).frequency, before.frequency);
         }
+    }
+
+    // The structured filters against plain dense references, in f64, for
+    // one and two modes and one and two sensors: the EKF prediction against
+    // F P Fᵀ + Q with F written out, the UKF prediction and innovation
+    // against all 2n + 1 sigma points of the same square root of P, the
+    // update against the Joseph form written out.
+
+    /// Pseudo-random numbers in [-1, 1).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        }
+    }
+
+    fn tracker<const N: usize>(
+        modes: usize,
+        sensors: usize,
+        filter: Filter,
+    ) -> ModalTracker<f64, N> {
+        let kinds = [
+            Measured::Acceleration,
+            Measured::Velocity,
+            Measured::Displacement,
+        ];
+        let spec = kinds.map(|measured| SensorSpec {
+            measured,
+            noise: 1e-2,
+        });
+        let ms = [
+            ModeInit {
+                frequency: 20.0,
+                damping: 0.01,
+            },
+            ModeInit {
+                frequency: 57.0,
+                damping: 0.03,
+            },
+        ];
+        let amps = [
+            (1.0, 0.3),
+            (-0.4, 0.8),
+            (0.7, -0.2),
+            (0.5, 0.5),
+            (0.9, 0.1),
+            (0.2, -0.6),
+        ];
+        let tuning = Tuning {
+            frequency_walk: 0.5,
+            damping_walk: 0.02,
+            amplitude_walk: 0.1,
+            ..Tuning::default()
+        };
+        ModalTracker::new(
+            1e-3,
+            &spec[..sensors],
+            &ms[..modes],
+            &amps[..modes * sensors],
+            &tuning,
+            filter,
+        )
+        .unwrap()
+    }
+
+    /// A perturbed start estimate and a dense positive definite covariance
+    /// (entries of the order of the start variances, θ and λ correlated
+    /// with the amplitudes).
+    #[allow(clippy::needless_range_loop)]
+    fn random_core<const N: usize>(tr: &ModalTracker<f64, N>, rng: &mut Lcg) -> Core<f64, N> {
+        let mut x = tr.x0;
+        let mut scale = [0.0; N];
+        for (i, (xi, si)) in x.iter_mut().zip(scale.iter_mut()).enumerate() {
+            *si = tr.p0[i].sqrt();
+            *xi += 0.3 * *si * rng.next();
+        }
+        let mut a = [[0.0; N]; N];
+        for row in a.iter_mut() {
+            for v in row.iter_mut() {
+                *v = rng.next();
+            }
+        }
+        let mut p = [[0.0; N]; N];
+        for i in 0..N {
+            for j in 0..N {
+                let dot: f64 = (0..N).map(|k| a[i][k] * a[j][k]).sum();
+                p[i][j] = scale[i] * scale[j] * (dot / N as f64 + if i == j { 0.5 } else { 0.0 });
+            }
+        }
+        Core {
+            x,
+            p,
+            faded: [false; N],
+            run: 0,
+        }
+    }
+
+    fn process_ref<const N: usize>(tr: &ModalTracker<f64, N>, x: &mut [f64; N]) {
+        for m in 0..tr.modes {
+            let (ti, li) = tr.theta_lambda(m);
+            let r = rotation(x[ti], x[li]);
+            tr.rotate_mode(x, m, r);
+        }
+    }
+
+    fn add_q_ref<const N: usize>(
+        tr: &ModalTracker<f64, N>,
+        c: &Core<f64, N>,
+        p: &mut [[f64; N]; N],
+    ) {
+        for m in 0..tr.modes {
+            let (ti, li) = tr.theta_lambda(m);
+            if !c.faded[m] {
+                p[ti][ti] += tr.q_theta;
+                p[li][li] += tr.q_lambda[m];
+            }
+            for k in 0..tr.sensors {
+                let (ai, bi) = tr.pair(m, k);
+                p[ai][ai] += tr.q_amp;
+                p[bi][bi] += tr.q_amp;
+            }
+        }
+    }
+
+    /// Lower Cholesky factor in the tracker's pivot order, columns indexed
+    /// by pivot, rows by state.
+    #[allow(clippy::needless_range_loop)]
+    fn cholesky_ref<const N: usize>(tr: &ModalTracker<f64, N>, p: &[[f64; N]; N]) -> [[f64; N]; N] {
+        let piv: [usize; N] = core::array::from_fn(|t| tr.pivot(t));
+        let mut l = [[0.0; N]; N];
+        for j in 0..N {
+            let d = p[piv[j]][piv[j]] - (0..j).map(|k| l[j][k] * l[j][k]).sum::<f64>();
+            l[j][j] = d.sqrt();
+            for i in j + 1..N {
+                let v = p[piv[i]][piv[j]] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
+                l[i][j] = v / l[j][j];
+            }
+        }
+        let mut out = [[0.0; N]; N];
+        for i in 0..N {
+            for t in 0..N {
+                out[piv[i]][t] = l[i][t];
+            }
+        }
+        out
+    }
+
+    fn close<const N: usize>(a: &[[f64; N]; N], b: &[[f64; N]; N], what: &str) {
+        let big = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        for i in 0..N {
+            for j in 0..N {
+                assert!(
+                    (a[i][j] - b[i][j]).abs() <= 1e-12 * big,
+                    "{what} [{i}][{j}]: {} against {}",
+                    a[i][j],
+                    b[i][j]
+                );
+            }
+        }
+        assert!(
+            (0..N).all(|i| (0..N).all(|j| a[i][j] == a[j][i])),
+            "{what} not symmetric"
+        );
+    }
+
+    // Dense references read best with indices.
+    #[allow(clippy::needless_range_loop)]
+    fn check_filters<const N: usize>(modes: usize, sensors: usize) {
+        let mut rng = Lcg(N as u64 * 7919 + modes as u64);
+        for round in 0..4 {
+            // EKF prediction.
+            let tr = tracker::<N>(modes, sensors, Filter::Ekf);
+            let mut core = random_core(&tr, &mut rng);
+            core.faded[0] = round == 3;
+            let mut x = core.x;
+            process_ref(&tr, &mut x);
+            let mut f = [[0.0; N]; N];
+            for (i, row) in f.iter_mut().enumerate() {
+                row[i] = 1.0;
+            }
+            for m in 0..modes {
+                let (ti, li) = tr.theta_lambda(m);
+                let (ec, es) = rotation(core.x[ti], core.x[li]);
+                for k in 0..sensors {
+                    let (ai, bi) = tr.pair(m, k);
+                    let (a1, b1) = (x[ai], x[bi]);
+                    f[ai][ai] = ec;
+                    f[ai][bi] = -es;
+                    f[bi][ai] = es;
+                    f[bi][bi] = ec;
+                    f[ai][ti] = -b1;
+                    f[ai][li] = a1;
+                    f[bi][ti] = a1;
+                    f[bi][li] = b1;
+                }
+            }
+            let mut fp = [[0.0; N]; N];
+            for i in 0..N {
+                for j in 0..N {
+                    fp[i][j] = (0..N).map(|k| f[i][k] * core.p[k][j]).sum();
+                }
+            }
+            let mut want = [[0.0; N]; N];
+            for i in 0..N {
+                for j in 0..N {
+                    want[i][j] = (0..N).map(|k| fp[i][k] * f[j][k]).sum();
+                }
+            }
+            add_q_ref(&tr, &core, &mut want);
+            let mut got = core.clone();
+            let mut anchor = [[f64::NAN; 4]; N];
+            tr.predict_ekf(&mut got, &mut anchor);
+            assert_eq!(got.x, x, "EKF x, {modes} modes {sensors} sensors");
+            close(&got.p, &want, "EKF P");
+
+            // Joseph update, with a frozen mode in the last round.
+            let (mut v, s, y) = ([0.0; N], 0.7, 0.3);
+            for vi in v.iter_mut() {
+                *vi = 0.1 * rng.next();
+            }
+            let mut k = v.map(|vi| vi / s);
+            if core.faded[0] {
+                k[0] = 0.0;
+                k[1] = 0.0;
+            }
+            let mut want = got.p;
+            for i in 0..N {
+                for j in 0..N {
+                    want[i][j] += -k[i] * v[j] - v[i] * k[j] + s * k[i] * k[j];
+                }
+            }
+            let before = got.x;
+            let mut upd = got.clone();
+            tr.update(&mut upd, &v, s, y);
+            close(&upd.p, &want, "Joseph update");
+            for i in 0..N {
+                assert!(
+                    (upd.x[i] - (before[i] + k[i] * y)).abs() <= 1e-15 * (1.0 + before[i].abs())
+                );
+            }
+
+            // UKF prediction against the full sigma set.
+            let tr = tracker::<N>(modes, sensors, Filter::Ukf(UtParams::default()));
+            let (g, w0m, w0c, wi) = UtParams::default().weights(N).unwrap();
+            let l = cholesky_ref(&tr, &core.p);
+            let mut points = [[0.0; N]; 2];
+            let mut y0 = core.x;
+            process_ref(&tr, &mut y0);
+            let mut mean = y0.map(|v| w0m * v);
+            let mut ys = [[[0.0; N]; 2]; N];
+            for t in 0..N {
+                for (sgn, pt) in [1.0, -1.0].into_iter().zip(points.iter_mut()) {
+                    for i in 0..N {
+                        pt[i] = core.x[i] + sgn * g * l[i][t];
+                    }
+                    process_ref(&tr, pt);
+                }
+                ys[t] = points;
+                for i in 0..N {
+                    mean[i] += wi * (points[0][i] + points[1][i]);
+                }
+            }
+            let mut want = [[0.0; N]; N];
+            for i in 0..N {
+                for j in 0..N {
+                    let mut acc = w0c * (y0[i] - mean[i]) * (y0[j] - mean[j]);
+                    for pts in &ys {
+                        for pt in pts {
+                            acc += wi * (pt[i] - mean[i]) * (pt[j] - mean[j]);
+                        }
+                    }
+                    want[i][j] = acc;
+                }
+            }
+            add_q_ref(&tr, &core, &mut want);
+            let mut got = core.clone();
+            let mut anchor = [[f64::NAN; 4]; N];
+            assert!(tr.predict_ukf(&mut got, &mut anchor));
+            for i in 0..N {
+                assert!(
+                    (got.x[i] - mean[i]).abs() <= 1e-13 * (1.0 + mean[i].abs()),
+                    "UKF mean {i}: {} against {}",
+                    got.x[i],
+                    mean[i]
+                );
+            }
+            close(&got.p, &want, "UKF P");
+
+            // UKF innovation of every sensor against the full sigma set.
+            for c in 0..sensors {
+                let observe = |x: &[f64; N]| {
+                    (0..modes)
+                        .map(|m| {
+                            let (ti, li) = tr.theta_lambda(m);
+                            let (ai, bi) = tr.pair(m, c);
+                            let (hp, hq) = tr.coefficients(c, x[ti], x[li]);
+                            hp * x[ai] + hq * x[bi]
+                        })
+                        .sum::<f64>()
+                };
+                let z0 = observe(&core.x);
+                let mut zs = [[0.0; 2]; N];
+                let mut zhat = w0m * z0;
+                for t in 0..N {
+                    for (sgn, z) in [1.0, -1.0].into_iter().zip(zs[t].iter_mut()) {
+                        let pt: [f64; N] = core::array::from_fn(|i| core.x[i] + sgn * g * l[i][t]);
+                        *z = observe(&pt);
+                        zhat += wi * *z;
+                    }
+                }
+                let mut szz = w0c * (z0 - zhat) * (z0 - zhat) + tr.r[c];
+                let mut pxz = [0.0; N];
+                for t in 0..N {
+                    for (sgn, &z) in [1.0, -1.0].into_iter().zip(&zs[t]) {
+                        szz += wi * (z - zhat) * (z - zhat);
+                        for i in 0..N {
+                            pxz[i] += wi * sgn * g * l[i][t] * (z - zhat);
+                        }
+                    }
+                }
+                let mut v = [0.0; N];
+                let (zh, sz) = tr.innovation_ukf(&core, c, &mut v).unwrap();
+                assert!(
+                    (zh - zhat).abs() <= 1e-13 * (1.0 + zhat.abs()),
+                    "zhat {zh} {zhat}"
+                );
+                assert!((sz - szz).abs() <= 1e-12 * szz, "Pzz {sz} {szz}");
+                let big = pxz.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                for i in 0..N {
+                    assert!(
+                        (v[i] - pxz[i]).abs() <= 1e-12 * big,
+                        "Pxz {i}: {} {}",
+                        v[i],
+                        pxz[i]
+                    );
+                }
+            }
+
+            // Not positive definite: refused.
+            let mut bad = core.clone();
+            let (ai, bi) = tr.pair(modes - 1, sensors - 1);
+            bad.p[ai][bi] = 2.0 * (bad.p[ai][ai] * bad.p[bi][bi]).sqrt();
+            bad.p[bi][ai] = bad.p[ai][bi];
+            let (mut cols, mut schur) = ([[0.0; N]; N], [[0.0; N]; N]);
+            assert!(!tr.factor(&bad.p, &mut cols, &mut schur));
+        }
+    }
+
+    #[test]
+    fn structured_filters_match_dense_references() {
+        check_filters::<4>(1, 1);
+        check_filters::<6>(1, 2);
+        check_filters::<8>(2, 1);
+        check_filters::<12>(2, 2);
+    }
+
+    #[test]
+    fn sigma_point_and_anchor_rotations_are_accurate_in_f32() {
+        // Against the f64 polynomials (themselves within 6e-8 of sin, cos).
+        let mut rng = Lcg(3);
+        let mut worst = (0.0f64, 0.0f64);
+        for _ in 0..20_000 {
+            let theta = 0.05 + 2.8 * (rng.next() + 1.0) / 2.0;
+            let lambda = 0.05 * rng.next();
+            let (dt, dl) = (theta.min(1.0 / 32.0) * rng.next() * 0.5, rng.next() / 64.0);
+            let exact = |t: f64, l: f64| rotation(t, l);
+            let c = rotation(theta as f32, lambda as f32);
+            let [p, m] = rotation_pair(theta as f32, lambda as f32, dt as f32, dl as f32, c);
+            // The f32 rounding of the arguments moves the exact values by
+            // up to an ulp of θ times the rotation.
+            let (tp, lp) = (
+                f64::from(theta as f32) + f64::from(dt as f32),
+                f64::from(lambda as f32) + f64::from(dl as f32),
+            );
+            let (tm, lm) = (
+                f64::from(theta as f32) - f64::from(dt as f32),
+                f64::from(lambda as f32) - f64::from(dl as f32),
+            );
+            for (r, e) in [(p, exact(tp, lp)), (m, exact(tm, lm))] {
+                let err = (f64::from(r.0) - e.0).hypot(f64::from(r.1) - e.1) / e.0.hypot(e.1);
+                worst.0 = worst.0.max(err);
+            }
+            // Anchor within its radius.
+            let anchor = anchor_at(theta as f32, lambda as f32);
+            let (t2, l2) = (
+                theta as f32 + (dt / 32.0) as f32,
+                lambda as f32 - (dl / 32.0) as f32,
+            );
+            let r = rotation_near(&anchor, t2, l2).unwrap();
+            let e = exact(f64::from(t2), f64::from(l2));
+            let err = (f64::from(r.0) - e.0).hypot(f64::from(r.1) - e.1) / e.0.hypot(e.1);
+            worst.1 = worst.1.max(err);
+        }
+        assert!(worst.0 < 5e-7, "sigma pairs {}", worst.0);
+        assert!(worst.1 < 5e-7, "anchor {}", worst.1);
+        // Outside the radius, or for f64, no anchor.
+        let anchor = anchor_at(0.5f32, 0.0);
+        assert!(rotation_near(&anchor, 0.502f32, 0.0).is_none());
+        assert!(rotation_near(&anchor_at(0.5f64, 0.0), 0.5, 0.0).is_none());
+        // Below twice the radius θ has no anchor (sigma points could cross 0).
+        assert!(rotation_near(&anchor_at(1e-3f32, 0.0), 1e-3, 0.0).is_none());
     }
 }

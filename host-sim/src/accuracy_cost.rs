@@ -1,0 +1,582 @@
+//! `accuracy-cost`: one report of error against cost for every scheme,
+//! order and number type (`docs/accuracy-cost.{md,csv,svg}`), regenerated
+//! by `scripts/accuracy-cost.sh`.
+//!
+//! - **Errors** are computed here, on the host, against references that
+//!   are not the code under test: closed forms (eq 1.8 for Maxwell banks,
+//!   eq 1.21 for the fractional law, the continuous STS and Segalman laws,
+//!   the free decay's f0 and damping), or the same model in f64 at a 64
+//!   times finer step ([`families`]).
+//! - **Host cost**: ns per call by a timing loop (median of several runs)
+//!   and, in full mode with valgrind on the path, host instructions per
+//!   call under callgrind ([`host`]).
+//! - **Target cost**: the `kernel ...` lines of the `kernel-cost` firmware
+//!   run in QEMU on Cortex-M4F and Cortex-M3 (guest instructions per
+//!   call, state and parameter bytes), the code size of each measured
+//!   function from the firmware's ELF symbol table, and flash and static
+//!   RAM from its section headers ([`firmware`]).
+//!
+//! Rows are joined to the firmware by `family`, `name`, `n` and `type`;
+//! firmware lines no row asks for go to an "other kernels" table, so a new
+//! family printed by the firmware shows up without a change here.
+
+pub mod families;
+pub mod firmware;
+pub mod host;
+pub mod plot;
+mod report;
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+use firmware::{Elf, KernelLine, PeerLine};
+
+/// What identifies a kernel: the firmware's `family`, `name`, `n` and
+/// `type`.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Key {
+    /// `family=`.
+    pub family: String,
+    /// `name=`.
+    pub name: String,
+    /// `n=`.
+    pub n: usize,
+    /// `type=`.
+    pub number: String,
+}
+
+impl Key {
+    /// A key.
+    pub fn new(family: &str, name: &str, n: usize, number: &str) -> Self {
+        Self {
+            family: family.into(),
+            name: name.into(),
+            n,
+            number: number.into(),
+        }
+    }
+
+    /// One word for the callgrind child's output.
+    pub fn to_word(&self) -> String {
+        format!(
+            "key\t{}\t{}\t{}\t{}",
+            self.family, self.name, self.n, self.number
+        )
+    }
+
+    /// Reads [`Key::to_word`].
+    pub fn from_word(line: &str) -> Option<Self> {
+        let mut w = line.strip_prefix("key\t")?.split('\t');
+        let (family, name, n, number) = (w.next()?, w.next()?, w.next()?, w.next()?);
+        Some(Self::new(family, name, n.parse().ok()?, number))
+    }
+}
+
+/// Where a row's cost comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Cost {
+    /// One measured kernel.
+    One(Key),
+    /// The sum of measured kernels (a configuration the firmware measures
+    /// in parts: a fitted bank is a backbone plus a Maxwell bank).
+    Sum(Vec<Key>),
+}
+
+/// One configuration of the report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    /// Family, name, order and number type of the configuration.
+    pub key: Key,
+    /// Error (a fraction), when there is a reference.
+    pub error: Option<f64>,
+    /// What the error measures, against what.
+    pub measure: String,
+    /// Where the cost comes from.
+    pub cost: Cost,
+    /// Extra figures for the family table.
+    pub detail: String,
+    /// Host ns per call.
+    pub host_ns: Option<f64>,
+    /// Host instructions per call (callgrind).
+    pub host_instr: Option<f64>,
+    /// Cortex-M4F guest instructions per call (`net`, else `per_call`).
+    pub m4f: Option<f64>,
+    /// Cortex-M4F guest instructions per call, call included.
+    pub m4f_call: Option<f64>,
+    /// Cortex-M3 guest instructions per call.
+    pub m3: Option<f64>,
+    /// Code bytes of the measured function (Cortex-M4F build).
+    pub code_bytes: Option<u64>,
+    /// State bytes.
+    pub state_bytes: Option<u64>,
+    /// Parameter bytes.
+    pub params_bytes: Option<u64>,
+    /// On its family's Pareto front (error against M4F instructions).
+    pub front: bool,
+}
+
+impl Row {
+    /// A row with no cost joined yet.
+    pub fn new(key: Key, error: Option<f64>, measure: &str, cost: Cost) -> Self {
+        Self {
+            key,
+            error,
+            measure: measure.into(),
+            cost,
+            detail: String::new(),
+            host_ns: None,
+            host_instr: None,
+            m4f: None,
+            m4f_call: None,
+            m3: None,
+            code_bytes: None,
+            state_bytes: None,
+            params_bytes: None,
+            front: false,
+        }
+    }
+}
+
+/// How much to compute.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Options {
+    /// Fewer frequencies, steps, seeds and repeats; no callgrind. Every
+    /// family and code path still runs.
+    pub quick: bool,
+    /// Count host instructions under callgrind (when valgrind is there).
+    pub callgrind: bool,
+    /// Host timing.
+    pub timing: host::Timing,
+}
+
+impl Options {
+    /// The full report.
+    pub fn full() -> Self {
+        Self {
+            quick: false,
+            callgrind: true,
+            timing: host::Timing {
+                calls: 4 * host::CALLS,
+                runs: 9,
+            },
+        }
+    }
+
+    /// The quick mode of CI.
+    pub fn quick() -> Self {
+        Self {
+            quick: true,
+            callgrind: false,
+            timing: host::Timing {
+                calls: host::CALLS / 10,
+                runs: 3,
+            },
+        }
+    }
+}
+
+/// What the firmware printed and where its ELF files are.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Inputs {
+    /// `(source name, text)` of `kernel-cost` outputs.
+    pub kernels: Vec<(String, String)>,
+    /// `(triple or target, ELF bytes)` of the firmware builds.
+    pub elfs: Vec<(String, Vec<u8>)>,
+    /// `(source name, text)` of `kalman-peers` outputs.
+    pub peers: Vec<(String, String)>,
+}
+
+/// The firmware's footprint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Footprint {
+    /// Triple (or target) as given.
+    pub triple: String,
+    /// Report target (`m4f`, `m3`).
+    pub target: String,
+    /// `.text` bytes.
+    pub text: u64,
+    /// `.rodata` bytes.
+    pub rodata: u64,
+    /// `.data` bytes.
+    pub data: u64,
+    /// `.bss` bytes.
+    pub bss: u64,
+    /// Flash: every loaded section.
+    pub flash: u64,
+    /// Static RAM: .data + .bss + .uninit.
+    pub ram: u64,
+}
+
+/// A target of the issue, its measured figure and verdict.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Goal {
+    /// What is measured.
+    pub what: String,
+    /// The bound (at most).
+    pub limit: f64,
+    /// The measured figure.
+    pub measured: Option<f64>,
+    /// How it was measured.
+    pub note: String,
+}
+
+impl Goal {
+    /// Measured and within the bound.
+    pub fn met(&self) -> bool {
+        self.measured.is_some_and(|m| m <= self.limit)
+    }
+}
+
+/// The generated report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    /// Every configuration, with its joined costs.
+    pub rows: Vec<Row>,
+    /// What the report could not check (an ELF that is not the build
+    /// that printed the lines).
+    pub warnings: Vec<String>,
+    /// Firmware lines no row asked for (the "other kernels" table).
+    pub other: Vec<KernelLine>,
+    /// The issue's targets.
+    pub goals: Vec<Goal>,
+    /// Firmware footprints.
+    pub footprints: Vec<Footprint>,
+    /// Peer-crate lines.
+    pub peers: Vec<PeerLine>,
+    /// `accuracy-cost.md`.
+    pub markdown: String,
+    /// `accuracy-cost.csv`.
+    pub csv: String,
+    /// `accuracy-cost.svg`.
+    pub svg: String,
+}
+
+/// Columns of the CSV.
+pub const CSV_COLUMNS: [&str; 13] = [
+    "family",
+    "name",
+    "n",
+    "type",
+    "error",
+    "error_measure",
+    "host_ns",
+    "host_instr",
+    "m4f_instr",
+    "m3_instr",
+    "code_bytes",
+    "state_bytes",
+    "params_bytes",
+];
+
+/// The firmware lines, indexed by target and key.
+struct Lines {
+    by: BTreeMap<(String, Key), KernelLine>,
+    used: BTreeSet<(String, Key)>,
+}
+
+impl Lines {
+    fn new(lines: Vec<KernelLine>) -> Result<Self, String> {
+        let mut by = BTreeMap::new();
+        for l in lines {
+            let key = Key::new(&l.family, &l.name, l.n, &l.number);
+            let origin = l.origin.clone();
+            if let Some(old) = by.insert((l.target.clone(), key), l) {
+                return Err(format!(
+                    "{origin}: the same kernel as {} (target, family, name, n and type)",
+                    old.origin
+                ));
+            }
+        }
+        Ok(Self {
+            by,
+            used: BTreeSet::new(),
+        })
+    }
+
+    fn get(&mut self, target: &str, key: &Key) -> Option<&KernelLine> {
+        let k = (target.to_string(), key.clone());
+        let line = self.by.get(&k)?;
+        self.used.insert(k);
+        Some(line)
+    }
+}
+
+/// Sum over parts, `None` when any part is missing.
+fn sum_all(mut parts: impl Iterator<Item = Option<f64>>) -> Option<f64> {
+    parts.try_fold(0.0, |acc, v| Some(acc + v?))
+}
+
+fn sum_bytes(mut parts: impl Iterator<Item = Option<u64>>) -> Option<u64> {
+    parts.try_fold(0u64, |acc, v| acc.checked_add(v?))
+}
+
+/// Joins the measured costs into `row`.
+fn join(
+    row: &mut Row,
+    lines: &mut Lines,
+    elfs: &BTreeMap<String, Elf>,
+    ns: &BTreeMap<Key, f64>,
+    instr: &BTreeMap<Key, f64>,
+) {
+    let keys: Vec<Key> = match &row.cost {
+        Cost::One(k) => vec![k.clone()],
+        Cost::Sum(ks) => ks.clone(),
+    };
+    row.host_ns = sum_all(keys.iter().map(|k| ns.get(k).copied()));
+    row.host_instr = sum_all(keys.iter().map(|k| instr.get(k).copied()));
+    let m4f: Vec<Option<KernelLine>> = keys.iter().map(|k| lines.get("m4f", k).cloned()).collect();
+    let m3: Vec<Option<KernelLine>> = keys.iter().map(|k| lines.get("m3", k).cloned()).collect();
+    row.m4f = sum_all(m4f.iter().map(|l| l.as_ref().map(KernelLine::instructions)));
+    row.m4f_call = sum_all(m4f.iter().map(|l| l.as_ref().map(|l| l.per_call)));
+    row.m3 = sum_all(m3.iter().map(|l| l.as_ref().map(KernelLine::instructions)));
+    let elf = elfs.get("m4f");
+    row.code_bytes = sum_bytes(m4f.iter().map(|l| {
+        let f = l.as_ref()?.function?;
+        elf?.function_size(f).map(u64::from)
+    }));
+    let either = |i: usize| {
+        m4f.get(i)
+            .cloned()
+            .flatten()
+            .or(m3.get(i).cloned().flatten())
+    };
+    row.state_bytes = sum_bytes((0..keys.len()).map(|i| either(i)?.state_bytes));
+    row.params_bytes = sum_bytes((0..keys.len()).map(|i| either(i)?.params_bytes));
+}
+
+/// Marks each family's Pareto front over error and M4F instructions: a
+/// row is on it when its error is lower than that of every row of the
+/// family that costs less (or as much, listed before it).
+pub fn mark_fronts(rows: &mut [Row]) {
+    let families: BTreeSet<String> = rows.iter().map(|r| r.key.family.clone()).collect();
+    for family in families {
+        let mut idx: Vec<usize> = (0..rows.len())
+            .filter(|&i| {
+                let r = &rows[i];
+                r.key.family == family
+                    && r.error.is_some_and(f64::is_finite)
+                    && r.m4f.is_some_and(|c| c > 0.0)
+            })
+            .collect();
+        let cost = |i: usize| rows[i].m4f.unwrap_or(f64::INFINITY);
+        let err = |i: usize| rows[i].error.unwrap_or(f64::INFINITY);
+        idx.sort_by(|&a, &b| cost(a).total_cmp(&cost(b)).then(err(a).total_cmp(&err(b))));
+        let mut best = f64::INFINITY;
+        let mut front = Vec::new();
+        for i in idx {
+            let e = err(i);
+            if e < best {
+                best = e;
+                front.push(i);
+            }
+        }
+        for i in front {
+            if let Some(r) = rows.get_mut(i) {
+                r.front = true;
+            }
+        }
+    }
+}
+
+fn read_footprints(elfs: &BTreeMap<String, (String, Elf)>) -> Vec<Footprint> {
+    elfs.iter()
+        .map(|(target, (triple, elf))| Footprint {
+            triple: triple.clone(),
+            target: target.clone(),
+            text: elf.section_size(".text"),
+            rodata: elf.section_size(".rodata"),
+            data: elf.section_size(".data"),
+            bss: elf.section_size(".bss"),
+            flash: elf.flash(),
+            ram: elf.ram(),
+        })
+        .collect()
+}
+
+/// Computes the report from the firmware's outputs.
+pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, String> {
+    let mut all = Vec::new();
+    for (source, text) in &inputs.kernels {
+        all.extend(firmware::parse_kernels(source, text)?);
+    }
+    let mut lines = Lines::new(all)?;
+    let mut elfs = BTreeMap::new();
+    for (triple, bytes) in &inputs.elfs {
+        let elf = Elf::parse(bytes, triple)?;
+        elfs.insert(firmware::target_of_triple(triple), (triple.clone(), elf));
+    }
+    let mut peers = Vec::new();
+    for (source, text) in &inputs.peers {
+        peers.extend(firmware::parse_peers(source, text)?);
+    }
+
+    let warnings = elf_mismatches(&lines, &elfs);
+    let mut rows = families::rows(options)?;
+    let mut kernels = host::kernels()?;
+    let ns = host::time_all(&mut kernels, options.timing);
+    drop(kernels);
+    let instr = if options.callgrind && !options.quick && host::valgrind_available() {
+        host::instructions(host::CALLS, &std::env::temp_dir())?
+    } else {
+        BTreeMap::new()
+    };
+    let elf_only: BTreeMap<String, Elf> = elfs
+        .iter()
+        .map(|(t, (_, e))| (t.clone(), e.clone()))
+        .collect();
+    for row in &mut rows {
+        join(row, &mut lines, &elf_only, &ns, &instr);
+    }
+    mark_fronts(&mut rows);
+    let other: Vec<KernelLine> = lines
+        .by
+        .iter()
+        .filter(|(k, _)| !lines.used.contains(*k))
+        .map(|(_, l)| l.clone())
+        .collect();
+    let goals = report::goals(&mut lines, &peers);
+    let footprints = read_footprints(&elfs);
+    let context = report::Context {
+        options: *options,
+        inputs: inputs_summary(inputs),
+        callgrind: !instr.is_empty(),
+        warnings: warnings.clone(),
+    };
+    let markdown = report::markdown(&rows, &other, &goals, &footprints, &peers, &context);
+    let csv = report::csv(&rows, &other, &elf_only);
+    let svg = report::svg(&rows);
+    Ok(Report {
+        rows,
+        warnings,
+        other,
+        goals,
+        footprints,
+        peers,
+        markdown,
+        csv,
+        svg,
+    })
+}
+
+/// Lines whose `fn=` address is no function of their target's ELF: the
+/// ELF is not the build that printed them, and their code size is left
+/// out.
+fn elf_mismatches(lines: &Lines, elfs: &BTreeMap<String, (String, Elf)>) -> Vec<String> {
+    let mut out = Vec::new();
+    for line in lines.by.values() {
+        let (Some(f), Some((triple, elf))) = (line.function, elfs.get(&line.target)) else {
+            continue;
+        };
+        if f != 0 && elf.function_size(f).is_none() {
+            out.push(format!(
+                "{}: fn={f:#x} is no function of the {triple} ELF (not the build that printed it?)",
+                line.origin
+            ));
+        }
+    }
+    out
+}
+
+fn inputs_summary(inputs: &Inputs) -> Vec<String> {
+    let mut out: Vec<String> = inputs
+        .kernels
+        .iter()
+        .map(|(s, _)| format!("kernel lines: `{s}`"))
+        .collect();
+    out.extend(inputs.elfs.iter().map(|(t, _)| format!("ELF: {t}")));
+    out.extend(
+        inputs
+            .peers
+            .iter()
+            .map(|(s, _)| format!("peer lines: `{s}`")),
+    );
+    out
+}
+
+/// Writes `accuracy-cost.{md,csv,svg}` into `dir`.
+pub fn write(report: &Report, dir: &Path) -> Result<Vec<PathBuf>, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut out = Vec::new();
+    for (name, text) in [
+        ("accuracy-cost.md", &report.markdown),
+        ("accuracy-cost.csv", &report.csv),
+        ("accuracy-cost.svg", &report.svg),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+        out.push(path);
+    }
+    Ok(out)
+}
+
+/// Usage of the command.
+pub const USAGE: &str = "bushing-sim accuracy-cost [--quick] [--no-callgrind] --kernels FILE... \
+     [--elf TRIPLE=PATH...] [--peers FILE...] --out DIR";
+
+/// The `accuracy-cost` command (its arguments after the command word):
+/// reads the inputs, generates, writes, and returns what it wrote.
+pub fn cli(args: &[&str]) -> Result<String, String> {
+    let mut options = Options::full();
+    let mut inputs = Inputs::default();
+    let mut out: Option<&str> = None;
+    let mut list: Option<&str> = None;
+    for &a in args {
+        match a {
+            "--quick" => {
+                options = Options {
+                    callgrind: false,
+                    ..Options::quick()
+                };
+                list = None;
+            }
+            "--no-callgrind" => {
+                options.callgrind = false;
+                list = None;
+            }
+            "--kernels" | "--elf" | "--peers" | "--out" => list = Some(a),
+            _ if a.starts_with("--") => {
+                return Err(format!("accuracy-cost: unknown option {a}\nusage: {USAGE}"));
+            }
+            value => match list {
+                Some("--kernels") | Some("--peers") => {
+                    let text =
+                        std::fs::read_to_string(value).map_err(|e| format!("{value}: {e}"))?;
+                    let entry = (value.to_string(), text);
+                    if list == Some("--kernels") {
+                        inputs.kernels.push(entry);
+                    } else {
+                        inputs.peers.push(entry);
+                    }
+                }
+                Some("--elf") => {
+                    let (triple, path) = value.split_once('=').ok_or_else(|| {
+                        format!("accuracy-cost: --elf takes TRIPLE=PATH, not {value}")
+                    })?;
+                    let bytes = std::fs::read(path).map_err(|e| format!("{path}: {e}"))?;
+                    inputs.elfs.push((triple.to_string(), bytes));
+                }
+                Some("--out") if out.is_none() => out = Some(value),
+                _ => {
+                    return Err(format!(
+                        "accuracy-cost: unexpected argument {value}\nusage: {USAGE}"
+                    ));
+                }
+            },
+        }
+    }
+    let out = out.ok_or_else(|| format!("accuracy-cost: no --out DIR\nusage: {USAGE}"))?;
+    let report = generate(&inputs, &options)?;
+    let written = write(&report, Path::new(out))?;
+    let mut msg = String::new();
+    for p in written {
+        msg.push_str(&format!("wrote {}\n", p.display()));
+    }
+    for g in &report.goals {
+        msg.push_str(&format!(
+            "target {:<58} {}\n",
+            g.what,
+            if g.met() { "met" } else { "NOT met" }
+        ));
+    }
+    Ok(msg)
+}

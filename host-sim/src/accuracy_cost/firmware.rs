@@ -1,0 +1,558 @@
+//! What the firmware printed: `kernel ...` lines of `kernel-cost`,
+//! `kalman ...` lines of `kalman-peers`, and the firmware ELF files (code
+//! size of each measured function, flash and static RAM).
+//!
+//! Lines are `key=value` words separated by spaces after the leading word.
+//! Unknown keys are kept; a line that starts with the leading word but
+//! cannot be read is an error naming its file, line number and text. Other
+//! lines (comments, QEMU or cargo chatter) are skipped.
+
+use std::collections::BTreeMap;
+
+/// Where a kernel runs: `m4f`, `m3`, or whatever the line says.
+pub type Target = String;
+
+/// One `kernel ...` line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KernelLine {
+    /// `target=`: `m4f` or `m3`.
+    pub target: Target,
+    /// `type=`: number type (`f32`, `f64`, `fixed`, ...).
+    pub number: String,
+    /// `family=`.
+    pub family: String,
+    /// `name=`.
+    pub name: String,
+    /// `n=`: order (cells, taps, states).
+    pub n: usize,
+    /// `per_call=`: guest instructions per call, call included.
+    pub per_call: f64,
+    /// `net=`: the same without the call (what the kernel costs inlined),
+    /// when printed.
+    pub net: Option<f64>,
+    /// `state_bytes=`.
+    pub state_bytes: Option<u64>,
+    /// `params_bytes=`.
+    pub params_bytes: Option<u64>,
+    /// `fn=`: address of the measured function (0: none).
+    pub function: Option<u64>,
+    /// Every key of the line, as printed.
+    pub fields: BTreeMap<String, String>,
+    /// `file:line`, for messages.
+    pub origin: String,
+}
+
+impl KernelLine {
+    /// Instructions per call as the report counts them: `net` when the
+    /// firmware printed it, else `per_call`.
+    pub fn instructions(&self) -> f64 {
+        self.net.unwrap_or(self.per_call)
+    }
+}
+
+/// One `kalman ...` line of `kalman-peers`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PeerLine {
+    /// `name=`.
+    pub name: String,
+    /// `crate=`: `crate@version`, or `bushing` for ours.
+    pub krate: String,
+    /// `filter=`: `ekf`, `ukf`, `kf`.
+    pub filter: String,
+    /// `cost=`.
+    pub cost: f64,
+    /// `unit=`: `instructions` or `ns`.
+    pub unit: String,
+    /// `freq_err_pct=`.
+    pub freq_err_pct: Option<f64>,
+    /// `damp_err_pts=`.
+    pub damp_err_pts: Option<f64>,
+    /// `amp_rms=`.
+    pub amp_rms: Option<f64>,
+    /// Which input it came from (file name).
+    pub source: String,
+}
+
+impl PeerLine {
+    /// True for our own tracker.
+    pub fn is_ours(&self) -> bool {
+        self.krate == "bushing" || self.krate.starts_with("bushing@")
+    }
+}
+
+/// Splits `key=value` words; `what` names the line in errors.
+fn fields(words: &str, what: &str) -> Result<BTreeMap<String, String>, String> {
+    let mut out = BTreeMap::new();
+    for word in words.split_whitespace() {
+        let (k, v) = word
+            .split_once('=')
+            .ok_or_else(|| format!("{what}: '{word}' is not key=value"))?;
+        if k.is_empty() || v.is_empty() {
+            return Err(format!("{what}: '{word}' has an empty key or value"));
+        }
+        if out.insert(k.to_string(), v.to_string()).is_some() {
+            return Err(format!("{what}: key '{k}' given twice"));
+        }
+    }
+    Ok(out)
+}
+
+/// A required key.
+fn required<'a>(f: &'a BTreeMap<String, String>, key: &str, what: &str) -> Result<&'a str, String> {
+    f.get(key)
+        .map(String::as_str)
+        .ok_or_else(|| format!("{what}: no {key}="))
+}
+
+/// A number (finite, >= 0 unless `signed`).
+fn number(text: &str, key: &str, what: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .parse()
+        .map_err(|_| format!("{what}: {key}={text} is not a number"))?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{what}: {key}={text} is not a finite number >= 0"))
+    }
+}
+
+fn optional_number(
+    f: &BTreeMap<String, String>,
+    key: &str,
+    what: &str,
+) -> Result<Option<f64>, String> {
+    f.get(key).map(|t| number(t, key, what)).transpose()
+}
+
+/// An unsigned integer, decimal or `0x` hexadecimal.
+fn integer(text: &str, key: &str, what: &str) -> Result<u64, String> {
+    let parsed = match text.strip_prefix("0x").or_else(|| text.strip_prefix("0X")) {
+        Some(hex) => u64::from_str_radix(hex, 16),
+        None => text.parse(),
+    };
+    parsed.map_err(|_| format!("{what}: {key}={text} is not an unsigned integer"))
+}
+
+fn optional_integer(
+    f: &BTreeMap<String, String>,
+    key: &str,
+    what: &str,
+) -> Result<Option<u64>, String> {
+    f.get(key).map(|t| integer(t, key, what)).transpose()
+}
+
+/// Reads every `kernel ...` line of `text` (from `source`, for messages).
+pub fn parse_kernels(source: &str, text: &str) -> Result<Vec<KernelLine>, String> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        let Some(rest) = line.strip_prefix("kernel ") else {
+            if line == "kernel" {
+                return Err(format!("{source}:{}: empty kernel line", i + 1));
+            }
+            continue;
+        };
+        let origin = format!("{source}:{}", i + 1);
+        let what = format!("{origin}: malformed kernel line '{line}'");
+        let f = fields(rest, &what)?;
+        let n = integer(required(&f, "n", &what)?, "n", &what)?;
+        let n = usize::try_from(n).map_err(|_| format!("{what}: n too large"))?;
+        out.push(KernelLine {
+            target: required(&f, "target", &what)?.to_string(),
+            number: required(&f, "type", &what)?.to_string(),
+            family: required(&f, "family", &what)?.to_string(),
+            name: required(&f, "name", &what)?.to_string(),
+            n,
+            per_call: number(required(&f, "per_call", &what)?, "per_call", &what)?,
+            net: optional_number(&f, "net", &what)?,
+            state_bytes: optional_integer(&f, "state_bytes", &what)?,
+            params_bytes: optional_integer(&f, "params_bytes", &what)?,
+            function: optional_integer(&f, "fn", &what)?,
+            fields: f,
+            origin,
+        });
+    }
+    Ok(out)
+}
+
+/// Reads every `kalman ...` line of `text`.
+pub fn parse_peers(source: &str, text: &str) -> Result<Vec<PeerLine>, String> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        let Some(rest) = line.strip_prefix("kalman ") else {
+            continue;
+        };
+        let what = format!("{source}:{}: malformed kalman line '{line}'", i + 1);
+        let f = fields(rest, &what)?;
+        // Errors may be signed or missing ("nan" when a filter diverged).
+        let error = |key: &str| -> Result<Option<f64>, String> {
+            match f.get(key) {
+                None => Ok(None),
+                Some(t) => {
+                    let v: f64 = t
+                        .parse()
+                        .map_err(|_| format!("{what}: {key}={t} is not a number"))?;
+                    Ok(v.is_finite().then_some(v.abs()))
+                }
+            }
+        };
+        out.push(PeerLine {
+            name: required(&f, "name", &what)?.to_string(),
+            krate: required(&f, "crate", &what)?.to_string(),
+            filter: required(&f, "filter", &what)?.to_string(),
+            cost: number(required(&f, "cost", &what)?, "cost", &what)?,
+            unit: required(&f, "unit", &what)?.to_string(),
+            freq_err_pct: error("freq_err_pct")?,
+            damp_err_pts: error("damp_err_pts")?,
+            amp_rms: error("amp_rms")?,
+            source: source.to_string(),
+        });
+    }
+    Ok(out)
+}
+
+/// Which report target an ELF given as `--elf TRIPLE=PATH` belongs to.
+pub fn target_of_triple(triple: &str) -> Target {
+    match triple {
+        "thumbv7em-none-eabihf" | "m4f" => "m4f".into(),
+        "thumbv7m-none-eabi" | "m3" => "m3".into(),
+        other => other.into(),
+    }
+}
+
+/// A section header of an ELF32 file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Section {
+    /// Name from the section-name string table.
+    pub name: String,
+    /// `sh_type`.
+    pub kind: u32,
+    /// `sh_flags`.
+    pub flags: u32,
+    /// `sh_addr`.
+    pub addr: u32,
+    /// `sh_size`.
+    pub size: u32,
+}
+
+/// A function symbol.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Function {
+    /// Address, Thumb bit cleared.
+    pub addr: u32,
+    /// Size in bytes.
+    pub size: u32,
+}
+
+/// The parts of an ELF32 little-endian file the report uses.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Elf {
+    /// Every section.
+    pub sections: Vec<Section>,
+    /// Every `STT_FUNC` symbol of `.symtab`.
+    pub functions: Vec<Function>,
+}
+
+const SHT_SYMTAB: u32 = 2;
+const SHT_NOBITS: u32 = 8;
+const SHF_ALLOC: u32 = 2;
+const STT_FUNC: u8 = 2;
+
+fn u16_at(b: &[u8], at: usize) -> Option<u16> {
+    Some(u16::from_le_bytes(b.get(at..at + 2)?.try_into().ok()?))
+}
+
+fn u32_at(b: &[u8], at: usize) -> Option<u32> {
+    Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?))
+}
+
+/// A NUL-terminated name at `at` of a string table.
+fn name_at(table: &[u8], at: usize) -> String {
+    let tail = table.get(at..).unwrap_or(&[]);
+    let end = tail.iter().position(|&c| c == 0).unwrap_or(tail.len());
+    String::from_utf8_lossy(tail.get(..end).unwrap_or(&[])).into_owned()
+}
+
+impl Elf {
+    /// Reads the section headers and the function symbols of an ELF32
+    /// little-endian file; `what` names it in errors.
+    pub fn parse(bytes: &[u8], what: &str) -> Result<Self, String> {
+        let bad = |why: &str| format!("{what}: not a readable ELF32 little-endian file ({why})");
+        if bytes.get(..4) != Some(b"\x7fELF".as_slice()) {
+            return Err(bad("no ELF magic"));
+        }
+        if bytes.get(4) != Some(&1) || bytes.get(5) != Some(&1) {
+            return Err(bad("not 32-bit little-endian"));
+        }
+        let shoff = u32_at(bytes, 32).ok_or_else(|| bad("short header"))? as usize;
+        let shentsize = u16_at(bytes, 46).ok_or_else(|| bad("short header"))? as usize;
+        let shnum = u16_at(bytes, 48).ok_or_else(|| bad("short header"))? as usize;
+        let shstrndx = u16_at(bytes, 50).ok_or_else(|| bad("short header"))? as usize;
+        if shentsize < 40 {
+            return Err(bad("section header entries under 40 bytes"));
+        }
+        // (name offset, type, flags, addr, offset, size, link, entsize)
+        let mut raw = Vec::with_capacity(shnum);
+        for i in 0..shnum {
+            let h = shoff
+                .checked_add(i.checked_mul(shentsize).ok_or_else(|| bad("overflow"))?)
+                .ok_or_else(|| bad("overflow"))?;
+            let field = |k: usize| u32_at(bytes, h + 4 * k).ok_or_else(|| bad("section header"));
+            raw.push([
+                field(0)?,
+                field(1)?,
+                field(2)?,
+                field(3)?,
+                field(4)?,
+                field(5)?,
+                field(6)?,
+                field(9)?,
+            ]);
+        }
+        let data = |s: &[u32; 8]| -> &[u8] {
+            let (off, size) = (s[4] as usize, s[5] as usize);
+            if s[1] == SHT_NOBITS {
+                return &[];
+            }
+            off.checked_add(size)
+                .and_then(|end| bytes.get(off..end))
+                .unwrap_or(&[])
+        };
+        let names = raw.get(shstrndx).map(data).unwrap_or(&[]);
+        let sections = raw
+            .iter()
+            .map(|s| Section {
+                name: name_at(names, s[0] as usize),
+                kind: s[1],
+                flags: s[2],
+                addr: s[3],
+                size: s[5],
+            })
+            .collect();
+        let mut functions = Vec::new();
+        for s in raw.iter().filter(|s| s[1] == SHT_SYMTAB) {
+            let table = data(s);
+            let entsize = (s[7] as usize).max(16);
+            for sym in table.chunks_exact(entsize) {
+                let info = sym.get(12).copied().unwrap_or(0);
+                if info & 0x0f != STT_FUNC {
+                    continue;
+                }
+                let (Some(value), Some(size)) = (u32_at(sym, 4), u32_at(sym, 8)) else {
+                    continue;
+                };
+                functions.push(Function {
+                    addr: value & !1,
+                    size,
+                });
+            }
+        }
+        Ok(Self {
+            sections,
+            functions,
+        })
+    }
+
+    /// Code size of the function at `addr` (Thumb bit ignored): the
+    /// largest size of the symbols there (aliases share an address).
+    pub fn function_size(&self, addr: u64) -> Option<u32> {
+        let addr = u32::try_from(addr & !1).ok()?;
+        if addr == 0 {
+            return None;
+        }
+        self.functions
+            .iter()
+            .filter(|f| f.addr == addr)
+            .map(|f| f.size)
+            .max()
+    }
+
+    /// Size of the section called `name` (0 when absent).
+    pub fn section_size(&self, name: &str) -> u64 {
+        self.sections
+            .iter()
+            .filter(|s| s.name == name)
+            .map(|s| u64::from(s.size))
+            .sum()
+    }
+
+    /// Flash: every section loaded from the image (allocated and not
+    /// NOBITS: vector table, .text, .rodata, .data's initial values).
+    pub fn flash(&self) -> u64 {
+        self.sections
+            .iter()
+            .filter(|s| s.flags & SHF_ALLOC != 0 && s.kind != SHT_NOBITS)
+            .map(|s| u64::from(s.size))
+            .sum()
+    }
+
+    /// Static RAM: .data, .bss and .uninit.
+    pub fn ram(&self) -> u64 {
+        [".data", ".bss", ".uninit"]
+            .iter()
+            .map(|n| self.section_size(n))
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A minimal ELF32: sections NULL, .text (0x40 bytes at 0x400),
+    /// .bss (0x10, NOBITS), .symtab (two functions, one object), .strtab
+    /// and .shstrtab.
+    pub(crate) fn tiny_elf() -> Vec<u8> {
+        let shstr = b"\0.text\0.bss\0.symtab\0.strtab\0.shstrtab\0";
+        let name = |s: &str| {
+            let hay = std::str::from_utf8(shstr).unwrap_or("");
+            hay.find(s).unwrap_or(0) as u32
+        };
+        let mut sym = Vec::new();
+        sym.extend_from_slice(&[0u8; 16]);
+        for (value, size, info) in [(0x401u32, 0x20u32, 0x12u8), (0x421, 0x1c, 0x02), (0, 4, 1)] {
+            sym.extend_from_slice(&1u32.to_le_bytes());
+            sym.extend_from_slice(&value.to_le_bytes());
+            sym.extend_from_slice(&size.to_le_bytes());
+            sym.extend_from_slice(&[info, 0, 1, 0]);
+        }
+        let text = vec![0u8; 0x40];
+        let strtab = b"\0f\0".to_vec();
+        let mut body = Vec::new();
+        let mut place = |bytes: &[u8]| {
+            let at = 52 + body.len() as u32;
+            body.extend_from_slice(bytes);
+            at
+        };
+        let text_off = place(&text);
+        let sym_off = place(&sym);
+        let str_off = place(&strtab);
+        let shstr_off = place(shstr);
+        let shoff = 52 + body.len() as u32;
+        let mut out = vec![0x7f, b'E', b'L', b'F', 1, 1, 1, 0];
+        out.resize(16, 0);
+        out.extend_from_slice(&2u16.to_le_bytes()); // e_type
+        out.extend_from_slice(&40u16.to_le_bytes()); // EM_ARM
+        out.extend_from_slice(&1u32.to_le_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes()); // entry
+        out.extend_from_slice(&0u32.to_le_bytes()); // phoff
+        out.extend_from_slice(&shoff.to_le_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes()); // flags
+        out.extend_from_slice(&52u16.to_le_bytes());
+        out.extend_from_slice(&0u16.to_le_bytes());
+        out.extend_from_slice(&0u16.to_le_bytes());
+        out.extend_from_slice(&40u16.to_le_bytes());
+        out.extend_from_slice(&6u16.to_le_bytes());
+        out.extend_from_slice(&5u16.to_le_bytes());
+        out.extend_from_slice(&body);
+        let headers: [[u32; 10]; 6] = [
+            [0; 10],
+            [name(".text"), 1, 6, 0x400, text_off, 0x40, 0, 0, 8, 0],
+            [name(".bss"), 8, 3, 0x2000_0000, 0, 0x10, 0, 0, 4, 0],
+            [
+                name(".symtab"),
+                2,
+                0,
+                0,
+                sym_off,
+                sym.len() as u32,
+                4,
+                1,
+                4,
+                16,
+            ],
+            [
+                name(".strtab"),
+                3,
+                0,
+                0,
+                str_off,
+                strtab.len() as u32,
+                0,
+                0,
+                1,
+                0,
+            ],
+            [
+                name(".shstrtab"),
+                3,
+                0,
+                0,
+                shstr_off,
+                shstr.len() as u32,
+                0,
+                0,
+                1,
+                0,
+            ],
+        ];
+        for h in headers {
+            for w in h {
+                out.extend_from_slice(&w.to_le_bytes());
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn elf_sections_and_function_sizes() {
+        let elf = Elf::parse(&tiny_elf(), "tiny").unwrap();
+        assert_eq!(elf.section_size(".text"), 0x40);
+        assert_eq!(elf.flash(), 0x40);
+        assert_eq!(elf.ram(), 0x10);
+        assert_eq!(elf.function_size(0x401), Some(0x20));
+        assert_eq!(elf.function_size(0x400), Some(0x20));
+        assert_eq!(elf.function_size(0x420), Some(0x1c));
+        assert_eq!(elf.function_size(0), None);
+        assert_eq!(elf.function_size(0x999), None);
+    }
+
+    #[test]
+    fn truncated_or_foreign_files_are_errors_not_panics() {
+        let elf = tiny_elf();
+        for cut in [0, 3, 20, 51, 100, elf.len() - 1] {
+            let _ = Elf::parse(elf.get(..cut).unwrap_or(&[]), "cut");
+        }
+        assert!(Elf::parse(b"\x7fELF\x02\x01", "x").is_err());
+        assert!(Elf::parse(b"MZ", "x").unwrap_err().contains("x:"));
+    }
+
+    #[test]
+    fn kernel_lines_are_read_and_bad_ones_named() {
+        let text = "# comment\nqemu noise\n\
+            kernel target=m4f type=f32 family=maxwell name=rate-exact-ramp/plain n=8 per_call=126.0 state_bytes=32 params_bytes=448 fn=0x0000061c\n\
+            kernel target=m3 type=fixed family=mount6 name=x n=1 per_call=3 extra=yes\n";
+        let lines = parse_kernels("k.txt", text).unwrap();
+        assert_eq!(lines.len(), 2);
+        assert_eq!(lines[0].function, Some(0x61c));
+        assert_eq!(lines[0].instructions(), 126.0);
+        assert_eq!(lines[0].origin, "k.txt:3");
+        assert_eq!(
+            lines[1].fields.get("extra").map(String::as_str),
+            Some("yes")
+        );
+        for bad in [
+            "kernel target=m4f type=f32 family=a name=b n=1",
+            "kernel target=m4f type=f32 family=a name=b n=x per_call=1",
+            "kernel target=m4f type=f32 family=a name=b n=1 per_call=nan",
+            "kernel target=m4f type=f32 family=a name=b n=1 per_call=1 per_call=2",
+            "kernel target=m4f oops family=a name=b n=1 per_call=1",
+            "kernel target=m4f type=f32 family=a name=b n=1 per_call=1 fn=0xzz",
+            "kernel",
+        ] {
+            let e = parse_kernels("f", bad).unwrap_err();
+            assert!(e.starts_with("f:1"), "{e}");
+        }
+    }
+
+    #[test]
+    fn peer_lines() {
+        let text = "kalman name=a crate=kalman-x@0.1 filter=ekf cost=900 unit=instructions freq_err_pct=0.02 damp_err_pts=-0.01 amp_rms=nan\n";
+        let p = parse_peers("p", text).unwrap();
+        assert_eq!(p[0].damp_err_pts, Some(0.01));
+        assert_eq!(p[0].amp_rms, None);
+        assert!(!p[0].is_ours());
+        assert!(parse_peers("p", "kalman name=a crate=b filter=ekf unit=ns").is_err());
+    }
+}

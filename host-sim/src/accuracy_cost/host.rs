@@ -1,0 +1,424 @@
+//! Host cost of the firmware's kernels: ns per call by a repeated timing
+//! loop (median of several runs) and, in full mode, host instructions per
+//! call under valgrind's callgrind.
+//!
+//! Every kernel is built as the `kernel-cost` firmware builds it and
+//! called as it calls it (the same sine, the same drives, the state
+//! carried from call to call), keyed by the firmware's `family`, `name`,
+//! `n` and `type`.
+
+use std::collections::BTreeMap;
+use std::hint::black_box;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+use bushing::tracker::{Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning, UtParams};
+use bushing::{
+    Accumulator, Backbone, Bushing, Compensated, Drive, Effect, LibmExp, MaxwellBank, MaxwellForm,
+    MicromathExp, Multiplied, Plain, Real, XfBank, XfForm, XfSpec,
+};
+use bushing_boards::DT;
+
+use super::Key;
+use super::families::{StateName, XF_CELL, maxwell_specs, type_label};
+
+/// Calls of one pass: the firmware's sine length.
+pub const CALLS: usize = 2000;
+
+/// One kernel and a pass of `calls` calls over its input.
+pub struct HostKernel {
+    /// Family, name, order, number type.
+    pub key: Key,
+    /// Runs that many calls, the state carried over.
+    pub pass: Box<dyn FnMut(usize)>,
+}
+
+fn sine() -> Vec<f32> {
+    let (amplitude, period) = super::families::SINE;
+    bushing_boards::sine::<CALLS>(amplitude, period).to_vec()
+}
+
+/// The drives of the firmware's sine on its polynomial backbone, in `T`
+/// (widened from the f32 ones).
+pub fn drives<T: Real>() -> Result<Vec<Drive<T>>, String> {
+    let poly = bushing_boards::polynomial().map_err(|e| e.to_string())?;
+    let xs = bushing_boards::sine::<CALLS>(super::families::SINE.0, super::families::SINE.1);
+    let to = |v: f32| T::from_f64(f64::from(v));
+    Ok(bushing_boards::drives(&poly, &xs)
+        .iter()
+        .map(|d| Drive {
+            x: to(d.x),
+            dx: to(d.dx),
+            f_inf: to(d.f_inf),
+            df_inf: to(d.df_inf),
+            k_inf: to(d.k_inf),
+        })
+        .collect())
+}
+
+fn effect_kernel<T: Real + 'static, E: Effect<T> + 'static>(
+    key: Key,
+    effect: E,
+    drives: Vec<Drive<T>>,
+    force_only: bool,
+) -> HostKernel {
+    let mut state = effect.rest(T::ZERO);
+    let mut at = 0usize;
+    HostKernel {
+        key,
+        pass: Box::new(move |calls| {
+            for _ in 0..calls {
+                let Some(d) = drives.get(at) else {
+                    at = 0;
+                    continue;
+                };
+                at = (at + 1) % drives.len().max(1);
+                if force_only {
+                    black_box(effect.step_force(&mut state, black_box(d)));
+                } else {
+                    black_box(effect.step(&mut state, black_box(d)));
+                }
+            }
+        }),
+    }
+}
+
+fn bushing_kernel<T: Real + 'static, B: Backbone<T> + 'static, E: Effect<T> + 'static>(
+    key: Key,
+    b: Bushing<T, B, E>,
+    xs: Vec<T>,
+) -> HostKernel {
+    let mut state = b.state_at(T::ZERO);
+    let mut at = 0usize;
+    HostKernel {
+        key,
+        pass: Box::new(move |calls| {
+            for _ in 0..calls {
+                let x = xs.get(at).copied().unwrap_or(T::ZERO);
+                at = (at + 1) % xs.len().max(1);
+                let o = b.step(&mut state, black_box(x));
+                black_box([o.force, o.tangent, o.dissipated]);
+            }
+        }),
+    }
+}
+
+fn maxwell_kernels<T: Real + 'static, A: Accumulator<T> + StateName + 'static, const N: usize>(
+    out: &mut Vec<HostKernel>,
+) -> Result<(), String> {
+    let specs = maxwell_specs::<N>().map_err(|e| e.to_string())?;
+    let d = drives::<T>()?;
+    for form in MaxwellForm::ALL {
+        let bank = MaxwellBank::<T, N, A>::new(form, &specs, DT).map_err(|e| e.to_string())?;
+        let name = format!("{}/{}", form.name(), A::NAME);
+        out.push(effect_kernel(
+            Key::new("maxwell", &name, N, type_label::<T>()),
+            bank.clone(),
+            d.clone(),
+            false,
+        ));
+        out.push(effect_kernel(
+            Key::new("maxwell-force", &name, N, type_label::<T>()),
+            bank,
+            d.clone(),
+            true,
+        ));
+    }
+    Ok(())
+}
+
+fn iwan_kernel<const N: usize>(out: &mut Vec<HostKernel>) -> Result<(), String> {
+    let bank = bushing_boards::iwan_bank::<N>().map_err(|e| e.to_string())?;
+    out.push(effect_kernel(
+        Key::new("iwan", "clamp/log", N, "f32"),
+        bank,
+        drives::<f32>()?,
+        false,
+    ));
+    Ok(())
+}
+
+fn grunwald_kernel<const N: usize>(out: &mut Vec<HostKernel>) -> Result<(), String> {
+    let b = bushing_boards::grunwald::<N>().map_err(|e| e.to_string())?;
+    out.push(bushing_kernel(
+        Key::new("grunwald", "bushing/alpha-0.5", N, "f32"),
+        b,
+        sine(),
+    ));
+    Ok(())
+}
+
+fn xf_kernels<T: Real + 'static>(out: &mut Vec<HostKernel>) -> Result<(), String> {
+    let (f, g, x_f) = XF_CELL;
+    for (form, name) in [
+        (XfForm::Midpoint, "midpoint"),
+        (XfForm::ExactRamp, "exact-ramp"),
+    ] {
+        let bank =
+            XfBank::<T, 1>::new(form, &[XfSpec::hz(f, g, x_f)], DT).map_err(|e| e.to_string())?;
+        out.push(effect_kernel(
+            Key::new("xf", name, 1, type_label::<T>()),
+            bank,
+            drives::<T>()?,
+            false,
+        ));
+    }
+    Ok(())
+}
+
+/// The firmware's tracker: one mode at 20 Hz, one accelerometer, 1 kHz,
+/// fed a 20 Hz sine by a rotation recurrence.
+fn tracker_kernels<T: Real + 'static>(out: &mut Vec<HostKernel>) -> Result<(), String> {
+    for (name, filter) in [
+        ("ekf/1-mode-1-acc", Filter::Ekf),
+        ("ukf/1-mode-1-acc", Filter::Ukf(UtParams::default())),
+    ] {
+        let tracker = ModalTracker::<T, 4>::new(
+            1e-3,
+            &[SensorSpec {
+                measured: Measured::Acceleration,
+                noise: 0.01,
+            }],
+            &[ModeInit {
+                frequency: 20.0,
+                damping: 0.01,
+            }],
+            &[(1.0, 0.0)],
+            &Tuning::default(),
+            filter,
+        )
+        .map_err(|e| e.to_string())?;
+        let mut state = tracker.start();
+        let (c, s) = (
+            T::from_f64((std::f64::consts::TAU * 0.02).cos()),
+            T::from_f64((std::f64::consts::TAU * 0.02).sin()),
+        );
+        let (mut re, mut im) = (T::ONE, T::ZERO);
+        out.push(HostKernel {
+            key: Key::new("tracker", name, 4, type_label::<T>()),
+            pass: Box::new(move |calls| {
+                for _ in 0..calls {
+                    let r = c * re - s * im;
+                    im = s * re + c * im;
+                    re = r;
+                    black_box(tracker.step(&mut state, &[black_box(re)]));
+                }
+            }),
+        });
+    }
+    Ok(())
+}
+
+/// Re-tuning the firmware's 8-cell bank, a_T from 1 upwards.
+fn retune_kernels(out: &mut Vec<HostKernel>) -> Result<(), String> {
+    for (name, path) in [
+        ("retune-8/libm", 0u8),
+        ("retune-8/micromath", 1),
+        ("retune-8/f64-shifted", 2),
+    ] {
+        let mut bank = bushing_boards::maxwell_bank::<8, Plain<f32>>(MaxwellForm::RateExactRamp)
+            .map_err(|e| e.to_string())?;
+        let mut k = 0u32;
+        out.push(HostKernel {
+            key: Key::new("retune", name, 8, "f32"),
+            pass: Box::new(move |calls| {
+                for _ in 0..calls {
+                    k = (k + 1) % 200;
+                    let a_t = 1.0 + black_box(k as f32) * 1e-2;
+                    let r = match path {
+                        0 => bank.retune::<LibmExp>(a_t),
+                        1 => bank.retune::<MicromathExp>(a_t),
+                        _ => bank.shifted(f64::from(a_t)).map(|b| {
+                            bank = b;
+                        }),
+                    };
+                    let _ = black_box(r);
+                }
+            }),
+        });
+    }
+    Ok(())
+}
+
+/// Every host kernel, in a fixed order.
+pub fn kernels() -> Result<Vec<HostKernel>, String> {
+    let mut out = Vec::new();
+    macro_rules! maxwell {
+        ($t:ty) => {
+            maxwell!($t, Plain);
+            maxwell!($t, Multiplied);
+            maxwell!($t, Compensated);
+        };
+        ($t:ty, $a:ident) => {
+            maxwell_kernels::<$t, $a<$t>, 1>(&mut out)?;
+            maxwell_kernels::<$t, $a<$t>, 2>(&mut out)?;
+            maxwell_kernels::<$t, $a<$t>, 4>(&mut out)?;
+            maxwell_kernels::<$t, $a<$t>, 8>(&mut out)?;
+            maxwell_kernels::<$t, $a<$t>, 16>(&mut out)?;
+        };
+    }
+    maxwell!(f64);
+    maxwell!(f32);
+    maxwell!(bushing::Q16);
+    iwan_kernel::<1>(&mut out)?;
+    iwan_kernel::<2>(&mut out)?;
+    iwan_kernel::<4>(&mut out)?;
+    iwan_kernel::<8>(&mut out)?;
+    iwan_kernel::<16>(&mut out)?;
+    iwan_kernel::<32>(&mut out)?;
+    iwan_kernel::<64>(&mut out)?;
+    xf_kernels::<f64>(&mut out)?;
+    xf_kernels::<f32>(&mut out)?;
+    let s = sine();
+    let poly = bushing_boards::polynomial().map_err(|e| e.to_string())?;
+    let spline = bushing_boards::spline().map_err(|e| e.to_string())?;
+    out.push(bushing_kernel(
+        Key::new("backbone", "polynomial-4", 1, "f32"),
+        Bushing::new(poly, ()).map_err(|e| e.to_string())?,
+        s.clone(),
+    ));
+    out.push(bushing_kernel(
+        Key::new("backbone", "spline-8", 1, "f32"),
+        Bushing::new(spline, ()).map_err(|e| e.to_string())?,
+        s.clone(),
+    ));
+    out.push(bushing_kernel(
+        Key::new("bushing", "default/spline+4maxwell+3jenkins", 7, "f32"),
+        bushing_boards::default_bushing().map_err(|e| e.to_string())?,
+        s.clone(),
+    ));
+    out.push(bushing_kernel(
+        Key::new("sts", "stack-16", 16, "f32"),
+        bushing_boards::sts16().map_err(|e| e.to_string())?,
+        s,
+    ));
+    grunwald_kernel::<16>(&mut out)?;
+    grunwald_kernel::<64>(&mut out)?;
+    grunwald_kernel::<256>(&mut out)?;
+    grunwald_kernel::<1024>(&mut out)?;
+    tracker_kernels::<f64>(&mut out)?;
+    tracker_kernels::<f32>(&mut out)?;
+    retune_kernels(&mut out)?;
+    Ok(out)
+}
+
+/// How long to time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Timing {
+    /// Calls per timed run.
+    pub calls: usize,
+    /// Runs, the median kept.
+    pub runs: usize,
+}
+
+/// ns per call of each kernel: one warm-up pass, then the median of
+/// `timing.runs` timed passes of `timing.calls` calls.
+pub fn time_all(kernels: &mut [HostKernel], timing: Timing) -> BTreeMap<Key, f64> {
+    let mut out = BTreeMap::new();
+    for k in kernels.iter_mut() {
+        (k.pass)(timing.calls);
+        let mut runs: Vec<f64> = (0..timing.runs.max(1))
+            .map(|_| {
+                let t = Instant::now();
+                (k.pass)(timing.calls);
+                t.elapsed().as_secs_f64() * 1e9 / timing.calls.max(1) as f64
+            })
+            .collect();
+        runs.sort_by(f64::total_cmp);
+        if let Some(&m) = runs.get(runs.len() / 2) {
+            out.insert(k.key.clone(), m);
+        }
+    }
+    out
+}
+
+/// The function callgrind counts in: one pass of a kernel.
+#[inline(never)]
+pub fn accuracy_cost_collected(pass: &mut dyn FnMut(usize), calls: usize) -> usize {
+    pass(calls);
+    // A use after the call: no tail call, so callgrind sees the return.
+    black_box(calls)
+}
+
+/// Callgrind dumps its counts when this returns (a function of its own:
+/// callgrind applies one option per function, and the one inside it
+/// toggles the collection).
+#[inline(never)]
+pub fn accuracy_cost_dumped(pass: &mut dyn FnMut(usize), calls: usize) -> usize {
+    black_box(accuracy_cost_collected(pass, calls))
+}
+
+/// The hidden `accuracy-cost-part CALLS` command, run under callgrind:
+/// prints each kernel's key, warms it up, then runs one pass of `calls`
+/// calls inside [`accuracy_cost_collected`] (one callgrind dump each, on
+/// leaving [`accuracy_cost_dumped`]).
+pub fn run_part(calls: usize) -> Result<(), String> {
+    let mut kernels = kernels()?;
+    for k in &mut kernels {
+        println!("{}", k.key.to_word());
+        (k.pass)(calls);
+        black_box(accuracy_cost_dumped(&mut *k.pass, calls));
+    }
+    Ok(())
+}
+
+/// Whether `valgrind` can be started.
+pub fn valgrind_available() -> bool {
+    Command::new("valgrind")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// Host instructions per call of every kernel: this program's hidden
+/// `accuracy-cost-part` command under callgrind, counting only
+/// [`accuracy_cost_collected`] and dumping after each of its calls.
+pub fn instructions(calls: usize, work: &Path) -> Result<BTreeMap<Key, f64>, String> {
+    let exe = std::env::current_exe().map_err(|e| format!("cannot find this program: {e}"))?;
+    let dir = work.join(format!("callgrind-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let base = dir.join("cg.out");
+    let output = Command::new("valgrind")
+        .arg("--tool=callgrind")
+        .arg(format!("--callgrind-out-file={}", base.display()))
+        .arg("--toggle-collect=*accuracy_cost_collected*")
+        .arg("--dump-after=*accuracy_cost_dumped*")
+        .arg(&exe)
+        .args(["accuracy-cost-part", &calls.to_string()])
+        .stderr(Stdio::null())
+        .output()
+        .map_err(|e| format!("cannot start valgrind: {e}"))?;
+    if !output.status.success() {
+        return Err(format!("valgrind failed: {}", output.status));
+    }
+    let keys: Vec<Key> = String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .filter_map(Key::from_word)
+        .collect();
+    let mut out = BTreeMap::new();
+    for (i, key) in keys.into_iter().enumerate() {
+        let file = dir.join(format!("cg.out.{}", i + 1));
+        let text =
+            std::fs::read_to_string(&file).map_err(|e| format!("{}: {e}", file.display()))?;
+        let total = callgrind_total(&text)
+            .ok_or_else(|| format!("{}: no instruction total", file.display()))?;
+        out.insert(key, total as f64 / calls.max(1) as f64);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    Ok(out)
+}
+
+/// The event total of a callgrind dump (its `totals:` or `summary:` line;
+/// the first event is the instruction count).
+fn callgrind_total(text: &str) -> Option<u64> {
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        if matches!(words.next(), Some("totals:" | "summary:")) {
+            return words.next()?.parse().ok();
+        }
+    }
+    None
+}

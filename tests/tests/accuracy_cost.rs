@@ -1,0 +1,237 @@
+//! The accuracy-cost report generator in quick mode on a small fixed
+//! sample of firmware output: structure only (CSV columns, every family,
+//! a well-formed plot, non-dominated Pareto fronts, the targets and the
+//! tables), never a timing.
+
+use std::sync::OnceLock;
+
+use bushing_sim::accuracy_cost::{self, CSV_COLUMNS, Inputs, Options, Report};
+use bushing_sim::svg;
+
+/// A few lines as `kernel-cost` prints them (M4F and M3), one of a family
+/// the generator does not know, and a comment.
+const KERNELS_M4F: &str = "\
+# kernel cost, 2000 calls each, sine 2 mm over 100 samples, dt = 0.0005 s
+kernel target=m4f type=f32 family=maxwell name=rate-exact-ramp/plain n=8 per_call=120.0 net=112.0 state_bytes=32 params_bytes=448 fn=0x000019a4
+kernel target=m4f type=f32 family=maxwell name=rate-exact-ramp/plain n=1 per_call=39.0 net=30.9 state_bytes=4 params_bytes=80 fn=0x00002c74
+kernel target=m4f type=f32 family=maxwell name=rate-midpoint/plain n=4 per_call=68.0 net=60.0 state_bytes=16 params_bytes=240 fn=0x00000c6c
+kernel target=m4f type=f32 family=maxwell name=load-explicit/plain n=16 per_call=331.0 net=323.0 state_bytes=64 params_bytes=864 fn=0x00001d9c
+kernel target=m4f type=f32 family=maxwell-force name=rate-exact-ramp/plain n=8 per_call=71.0 net=69.9 state_bytes=32 params_bytes=448 fn=0x00007a5c
+kernel target=m4f type=f32 family=maxwell-force name=rate-exact-ramp/multiplied n=8 per_call=65.0 net=64.0 state_bytes=32 params_bytes=448 fn=0x00006ce0
+kernel target=m4f type=f32 family=iwan name=clamp/log n=16 per_call=155.6 net=147.6 state_bytes=72 params_bytes=264 fn=0x000008a0
+kernel target=m4f type=f32 family=iwan name=clamp/log n=4 per_call=94.2 net=86.2 state_bytes=24 params_bytes=72 fn=0x00003398
+kernel target=m4f type=f32 family=xf name=midpoint n=1 per_call=138.1 net=131.1 state_bytes=4 params_bytes=40 fn=0x00002778
+kernel target=m4f type=f32 family=xf name=exact-ramp n=1 per_call=147.4 net=140.4 state_bytes=4 params_bytes=40 fn=0x00002778
+kernel target=m4f type=f32 family=backbone name=polynomial-4 n=1 per_call=55.0 net=48.0 state_bytes=24 params_bytes=56 fn=0x00005ab0
+kernel target=m4f type=f32 family=bushing name=default/spline+4maxwell+3jenkins n=7 per_call=206.5 net=199.5 state_bytes=60 params_bytes=568 fn=0x00003b40
+kernel target=m4f type=f32 family=grunwald name=bushing/alpha-0.5 n=64 per_call=413.7 net=406.7 state_bytes=288 params_bytes=368 fn=0x000048b0
+kernel target=m4f type=f32 family=tracker name=ekf/1-mode-1-acc n=4 per_call=1388.1 net=1388.1 state_bytes=100 params_bytes=216 fn=0x00007f10
+kernel target=m4f type=f32 family=tracker name=ukf/1-mode-1-acc n=4 per_call=4314.4 net=4314.3 state_bytes=100 params_bytes=216 fn=0x00007f10
+kernel target=m4f type=f32 family=retune name=retune-8/libm n=8 per_call=1211.0 net=1211.0 state_bytes=0 params_bytes=448 fn=0x00000000
+kernel target=m4f type=f32 family=retune name=retune-8/micromath n=8 per_call=1147.4 net=1147.4 state_bytes=0 params_bytes=448 fn=0x00000000
+kernel target=m4f type=fixed family=mount6 name=six-axis n=6 per_call=900.0 state_bytes=200 params_bytes=1000 fn=0x0
+";
+
+const KERNELS_M3: &str = "\
+kernel target=m3 type=f32 family=maxwell name=rate-exact-ramp/plain n=8 per_call=2500.0 net=2490.0 state_bytes=32 params_bytes=448 fn=0x00001000
+kernel target=m3 type=f32 family=tracker name=ekf/1-mode-1-acc n=4 per_call=21771.5 net=21771.5 state_bytes=100 params_bytes=216 fn=0x0000d070
+";
+
+const PEERS: &str = "\
+kalman name=bushing-ekf crate=bushing filter=ekf cost=1388 unit=instructions freq_err_pct=0.004 damp_err_pts=0.002 amp_rms=0.01
+kalman name=peer-ekf crate=some-kalman@0.3.1 filter=ekf cost=5000 unit=instructions freq_err_pct=0.004 damp_err_pts=0.003 amp_rms=0.02
+";
+
+fn inputs() -> Inputs {
+    Inputs {
+        kernels: vec![
+            ("m4f.txt".into(), KERNELS_M4F.into()),
+            ("m3.txt".into(), KERNELS_M3.into()),
+        ],
+        elfs: Vec::new(),
+        peers: vec![("peers.txt".into(), PEERS.into())],
+    }
+}
+
+/// The quick report of the sample, generated once for every test.
+fn quick() -> &'static Report {
+    static REPORT: OnceLock<Report> = OnceLock::new();
+    REPORT.get_or_init(|| {
+        accuracy_cost::generate(&inputs(), &Options::quick()).expect("the generator runs")
+    })
+}
+
+/// Splits one CSV line, honouring double quotes.
+fn csv_fields(line: &str) -> Vec<String> {
+    let mut out = vec![String::new()];
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' if quoted && chars.peek() == Some(&'"') => {
+                chars.next();
+                if let Some(f) = out.last_mut() {
+                    f.push('"');
+                }
+            }
+            '"' => quoted = !quoted,
+            ',' if !quoted => out.push(String::new()),
+            c => {
+                if let Some(f) = out.last_mut() {
+                    f.push(c);
+                }
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn quick_report_has_every_part() {
+    let report = quick();
+
+    // CSV: the columns, one row per configuration, every family.
+    let mut lines = report.csv.lines();
+    assert_eq!(lines.next(), Some(CSV_COLUMNS.join(",").as_str()));
+    let rows: Vec<Vec<String>> = lines.map(csv_fields).collect();
+    assert!(rows.len() >= report.rows.len());
+    for r in &rows {
+        assert_eq!(r.len(), CSV_COLUMNS.len(), "{r:?}");
+    }
+    for family in [
+        "maxwell",
+        "maxwell-force",
+        "grunwald",
+        "fractional-fit",
+        "iwan-sts",
+        "iwan-segalman",
+        "xf",
+        "tracker",
+        "retune",
+        "backbone",
+        "bushing",
+        "sts",
+        "iwan",
+        "mount6",
+    ] {
+        assert!(
+            rows.iter().any(|r| r[0] == family),
+            "family {family} missing from the CSV"
+        );
+    }
+    // Maxwell: every form, state, order and number type.
+    let maxwell = rows.iter().filter(|r| r[0] == "maxwell").count();
+    assert_eq!(maxwell, 5 * 3 * 5 * 3);
+    for number in ["f32", "f64", "fixed"] {
+        assert!(rows.iter().any(|r| r[0] == "maxwell" && r[3] == number));
+    }
+    // Errors are numbers where there is a reference; the joined M4F figure
+    // is the net one.
+    let joined = rows
+        .iter()
+        .find(|r| {
+            r[0] == "maxwell" && r[1] == "rate-exact-ramp/plain" && r[2] == "8" && r[3] == "f32"
+        })
+        .expect("the 8-cell exact-ramp row");
+    assert!(joined[4].parse::<f64>().is_ok_and(|e| e > 0.0 && e < 0.01));
+    assert_eq!(joined[8], "112");
+    assert_eq!(joined[9], "2490");
+    assert_eq!(joined[11], "32");
+
+    // The plot.
+    svg::well_formed(&report.svg).expect("well-formed SVG");
+    assert!(report.svg.contains("maxwell ("));
+
+    // Markdown: targets, cheapest within 1 %, tables, other kernels, peers.
+    let md = &report.markdown;
+    for part in [
+        "## Targets",
+        "## Cheapest configuration within 1 % error",
+        "## Error against cost",
+        "## Families",
+        "## Firmware footprint",
+        "## Other kernels",
+        "## Tracker against peer crates",
+        "mount6",
+        "some-kalman@0.3.1",
+    ] {
+        assert!(md.contains(part), "{part} missing from the report");
+    }
+    assert!(md.contains("**NOT met**") && md.contains("| met |"));
+    assert!(report.other.iter().any(|l| l.family == "mount6"));
+}
+
+#[test]
+fn pareto_fronts_are_not_dominated() {
+    let report = quick();
+    let on_plot = |r: &&accuracy_cost::Row| r.error.is_some() && r.m4f.is_some();
+    let mut fronts = 0;
+    for p in report.rows.iter().filter(|r| r.front) {
+        fronts += 1;
+        let (pe, pc) = (p.error.unwrap_or(f64::NAN), p.m4f.unwrap_or(f64::NAN));
+        for q in report
+            .rows
+            .iter()
+            .filter(on_plot)
+            .filter(|q| q.key.family == p.key.family)
+        {
+            let (qe, qc) = (q.error.unwrap_or(f64::NAN), q.m4f.unwrap_or(f64::NAN));
+            if qc < pc {
+                assert!(
+                    pe < qe,
+                    "{:?} on the front but {:?} is cheaper and as accurate",
+                    p.key,
+                    q.key
+                );
+            }
+        }
+    }
+    assert!(fronts > 0);
+    // Only rows with an error and an M4F figure are on a front.
+    assert!(report.rows.iter().filter(|r| r.front).all(|r| on_plot(&r)));
+}
+
+#[test]
+fn targets_are_judged_from_the_firmware_lines() {
+    let report = quick();
+    let goal = |what: &str| {
+        report
+            .goals
+            .iter()
+            .find(|g| g.what.contains(what))
+            .unwrap_or_else(|| panic!("no target {what}"))
+    };
+    let slow = goal("slow-exact");
+    assert!((slow.measured.unwrap_or(0.0) - 69.9 / 8.0).abs() < 1e-9);
+    assert!(slow.met());
+    assert!(goal("multiplicative").met());
+    assert!(goal("clamp Iwan").met());
+    assert!(goal("default 1D bushing").met());
+    assert!(!goal("EKF").met());
+    assert!(!goal("UKF").met());
+    // 1388 against 5000 at equal or better accuracy: 0.28 <= 1/3.
+    let third = goal("1/3");
+    assert!(third.met(), "{third:?}");
+}
+
+#[test]
+fn bad_firmware_lines_are_named_errors() {
+    let mut bad = inputs();
+    bad.kernels.push((
+        "broken.txt".into(),
+        "kernel target=m4f type=f32 family=maxwell name=x n=eight per_call=1\n".into(),
+    ));
+    let e = accuracy_cost::generate(&bad, &Options::quick()).unwrap_err();
+    assert!(e.contains("broken.txt:1") && e.contains("n=eight"), "{e}");
+
+    let mut dup = inputs();
+    dup.kernels.push(("again.txt".into(), KERNELS_M3.into()));
+    let e = accuracy_cost::generate(&dup, &Options::quick()).unwrap_err();
+    assert!(e.contains("again.txt:1") && e.contains("m3.txt:1"), "{e}");
+
+    let mut elf = inputs();
+    elf.elfs
+        .push(("thumbv7em-none-eabihf".into(), b"not an elf".to_vec()));
+    let e = accuracy_cost::generate(&elf, &Options::quick()).unwrap_err();
+    assert!(e.contains("thumbv7em-none-eabihf"), "{e}");
+}
