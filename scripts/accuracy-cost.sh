@@ -49,10 +49,11 @@ done
 peers=()
 if grep -q 'kalman-peers' board-examples/Cargo.toml; then
     echo "==> kalman-peers on the host"
-    cargo run -q --release -p bushing-boards --bin kalman-peers >"$work/kalman-peers-host.txt"
+    cargo run -q --release -p bushing-boards --features peers --bin kalman-peers >"$work/kalman-peers-host.txt"
     peers+=("$work/kalman-peers-host.txt")
     echo "==> kalman-peers on thumbv7em-none-eabihf (QEMU)"
-    cargo run -q --release -p bushing-boards --target thumbv7em-none-eabihf --bin kalman-peers \
+    cargo run -q --release -p bushing-boards --features peers --target thumbv7em-none-eabihf \
+        --bin kalman-peers \
         >"$work/kalman-peers-m4f.txt"
     peers+=("$work/kalman-peers-m4f.txt")
 else

@@ -4,14 +4,18 @@
 # runs:
 #   1. formatting and lints (host, and the Cortex-M crates for the target);
 #   2. core-nostd builds for Cortex-M4F (thumbv7em-none-eabihf) and
-#      Cortex-M3 without FPU (thumbv7m-none-eabi);
+#      Cortex-M3 without FPU (thumbv7m-none-eabi), in floating and fixed
+#      point;
 #   3. the Cortex-M suite under QEMU: M4F debug and release, M3 release;
 #      QEMU's exit code is the verdict, a hang is killed by `timeout`;
-#   4. the step-cost firmware under QEMU (guest instructions per step);
+#   4. the accuracy-cost report in its quick mode: the kernel-cost firmware
+#      on both cores under QEMU, the peer Kalman crates on the host and in
+#      QEMU, and the generator (into target/, so that it cannot rot);
 #   5. the host tests (unit, integration, doc);
 #   6. every scene of scenes/ run with the README's command form;
 #   7. a scene's cost against its parts in host instructions (callgrind),
 #      printed, never asserted.
+# Costs and timings are printed, never asserted.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -54,12 +58,16 @@ cargo clippy --workspace --all-targets -- -D warnings
 step "lints (Cortex-M4F: core, suite, firmware)"
 cargo clippy -p bushing --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing --features micromath --target thumbv7em-none-eabihf -- -D warnings
+cargo clippy -p bushing --features fixed --target thumbv7m-none-eabi -- -D warnings
 cargo clippy -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m -- -D warnings
 cargo clippy -p bushing-boards --target thumbv7em-none-eabihf --bins -- -D warnings
+cargo clippy -p bushing-boards --features peers --bins -- -D warnings
+cargo clippy -p bushing-boards --features peers --target thumbv7em-none-eabihf --bins -- -D warnings
 
 step "core-nostd for Cortex-M4F and Cortex-M3 (no FPU)"
 cargo build -p bushing --release --target thumbv7em-none-eabihf
 cargo build -p bushing --release --target thumbv7m-none-eabi
+cargo build -p bushing --release --features fixed --target thumbv7m-none-eabi
 
 step "Cortex-M suite in QEMU: M4F (mps2-an386), debug and release"
 cargo test -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m
@@ -68,8 +76,8 @@ cargo test -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m --rel
 step "Cortex-M suite in QEMU: M3 (mps2-an385), soft float, release"
 cargo test -p bushing-tests --target thumbv7m-none-eabi --test cortex_m --release
 
-step "step cost on Cortex-M4F in QEMU (guest instructions per step)"
-cargo run -p bushing-boards --release --target thumbv7em-none-eabihf --bin step-cost
+step "accuracy-cost report, quick mode (kernel-cost and kalman-peers in QEMU)"
+./scripts/accuracy-cost.sh --quick
 
 step "host tests"
 cargo test

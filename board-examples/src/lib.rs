@@ -3,13 +3,17 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+#[cfg(target_os = "none")]
+pub mod probe;
+
 use core::f64::consts::PI;
 
+use bushing::tracker::{Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning};
 use bushing::{
     Accumulator, Backbone, Berg, BoucWen, Bushing, Compensated, Dahl, Drive, Effect, FirstLoading,
     FractionalSpec, Grunwald, IwanBank, IwanCellSpec, IwanSliders, MaxwellBank, MaxwellForm,
-    MaxwellSpec, MonotoneSpline, Oscillator, ParamError, Plain, Polynomial, Sts, TurningPoints,
-    XfBank, XfForm, XfSpec,
+    MaxwellSpec, MonotoneSpline, Oscillator, ParamError, Plain, Polynomial, Real, Sts,
+    TurningPoints, XfBank, XfForm, XfSpec,
 };
 
 /// Control period of the probes: 2 kHz.
@@ -30,12 +34,12 @@ pub type Maxwell4Compensated =
     Bushing<f32, Polynomial<f32, 4>, (MaxwellBank<f32, 4, Compensated<f32>>,)>;
 
 /// Cubic hardening backbone, N and mm.
-pub fn polynomial() -> Result<Polynomial<f32, 4>, ParamError> {
+pub fn polynomial<T: Real>() -> Result<Polynomial<T, 4>, ParamError> {
     Polynomial::new(&[0.0, 150.0, 0.0, 4.0], (-6.0, 6.0))
 }
 
 /// Eight measured points, N and mm.
-pub fn spline() -> Result<MonotoneSpline<f32, 8>, ParamError> {
+pub fn spline<T: Real>() -> Result<MonotoneSpline<T, 8>, ParamError> {
     MonotoneSpline::new(
         &[-4.0, -2.0, -1.0, 0.0, 0.5, 1.0, 2.0, 4.0],
         &[-2500.0, -700.0, -250.0, 0.0, 110.0, 240.0, 600.0, 1900.0],
@@ -218,9 +222,9 @@ pub fn run<B: Backbone<f32>, E: Effect<f32>>(
 
 /// `N` Maxwell cells in `form`, corners spread evenly in log frequency from
 /// 0.01 Hz to 100 Hz (one cell: 1 Hz), total fraction 0.5.
-pub fn maxwell_bank<const N: usize, A: Accumulator<f32>>(
+pub fn maxwell_bank<T: Real, const N: usize, A: Accumulator<T>>(
     form: MaxwellForm,
-) -> Result<MaxwellBank<f32, N, A>, ParamError> {
+) -> Result<MaxwellBank<T, N, A>, ParamError> {
     let mut cells = [MaxwellSpec::new(1.0, 0.5); N];
     let step = if N > 1 { 4.0 / (N - 1) as f64 } else { 0.0 };
     let mut exponent = if N > 1 { -2.0 } else { 0.0 };
@@ -233,7 +237,7 @@ pub fn maxwell_bank<const N: usize, A: Accumulator<f32>>(
 
 /// `N` Jenkins cells on 150 N/mm, slip distances spread evenly in log from
 /// 0.02 mm to 1.5 mm, total fraction 0.4 (clamp form).
-pub fn iwan_bank<const N: usize>() -> Result<IwanBank<f32, N>, ParamError> {
+pub fn iwan_bank<T: Real, const N: usize>() -> Result<IwanBank<T, N>, ParamError> {
     IwanBank::new(&jenkins::<N>())
 }
 
@@ -255,41 +259,41 @@ pub fn jenkins<const N: usize>() -> [IwanCellSpec; N] {
 
 /// The thesis's default 1D bushing: spline backbone, 4 Maxwell cells
 /// (exact ramp, plain states), 3 Jenkins cells (clamp form).
-pub type DefaultBushing =
-    Bushing<f32, MonotoneSpline<f32, 8>, (MaxwellBank<f32, 4>, IwanBank<f32, 3>)>;
+pub type DefaultBushing<T = f32> =
+    Bushing<T, MonotoneSpline<T, 8>, (MaxwellBank<T, 4>, IwanBank<T, 3>)>;
 
 /// Builds the [`DefaultBushing`].
-pub fn default_bushing() -> Result<DefaultBushing, ParamError> {
+pub fn default_bushing<T: Real>() -> Result<DefaultBushing<T>, ParamError> {
     let jenkins = [JENKINS[0], JENKINS[1], JENKINS[2]];
     Bushing::new(
         spline()?,
         (
-            MaxwellBank::<f32, 4, Plain<f32>>::new(MaxwellForm::RateExactRamp, &CELLS, DT)?,
+            MaxwellBank::<T, 4, Plain<T>>::new(MaxwellForm::RateExactRamp, &CELLS, DT)?,
             IwanBank::new(&jenkins)?,
         ),
     )
 }
 
 /// Sine input of `N` samples, amplitude `amplitude` mm and `period` samples.
-pub fn sine<const N: usize>(amplitude: f64, period: usize) -> [f32; N] {
-    let mut x = [0.0f32; N];
+pub fn sine<T: Real, const N: usize>(amplitude: f64, period: usize) -> [T; N] {
+    let mut x = [T::ZERO; N];
     let w = 2.0 * PI / period.max(1) as f64;
     for (i, v) in x.iter_mut().enumerate() {
-        *v = (amplitude * libm::sin(w * i as f64)) as f32;
+        *v = T::from_f64(amplitude * libm::sin(w * i as f64));
     }
     x
 }
 
 /// The drives an effect sees when the polynomial backbone follows `xs`.
-pub fn drives<const N: usize>(backbone: &Polynomial<f32, 4>, xs: &[f32; N]) -> [Drive<f32>; N] {
+pub fn drives<T: Real, const N: usize>(backbone: &Polynomial<T, 4>, xs: &[T; N]) -> [Drive<T>; N] {
     let mut out = [Drive {
-        x: 0.0,
-        dx: 0.0,
-        f_inf: 0.0,
-        df_inf: 0.0,
-        k_inf: 1.0,
+        x: T::ZERO,
+        dx: T::ZERO,
+        f_inf: T::ZERO,
+        df_inf: T::ZERO,
+        k_inf: T::ONE,
     }; N];
-    let (mut x_old, mut f_old) = (0.0, 0.0);
+    let (mut x_old, mut f_old) = (T::ZERO, T::ZERO);
     for (d, &x) in out.iter_mut().zip(xs) {
         let (f, k) = backbone.eval(x);
         *d = Drive {
@@ -302,4 +306,23 @@ pub fn drives<const N: usize>(backbone: &Polynomial<f32, 4>, xs: &[f32; N]) -> [
         (x_old, f_old) = (x, f);
     }
     out
+}
+
+/// The firmware's modal tracker: one mode at 20 Hz (damping 1 %), one
+/// accelerometer (noise 0.01), 1 kHz, default tuning.
+pub fn modal_tracker<T: Real>(filter: Filter) -> Result<ModalTracker<T, 4>, ParamError> {
+    ModalTracker::new(
+        1e-3,
+        &[SensorSpec {
+            measured: Measured::Acceleration,
+            noise: 0.01,
+        }],
+        &[ModeInit {
+            frequency: 20.0,
+            damping: 0.01,
+        }],
+        &[(1.0, 0.0)],
+        &Tuning::default(),
+        filter,
+    )
 }

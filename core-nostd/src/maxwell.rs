@@ -467,7 +467,7 @@ impl<T: Real, const N: usize, A: Accumulator<T>> MaxwellBank<T, N, A> {
     /// (2.4e-3 on e^-h, so the effective corner ln(1/(1-d))/dt moves by at
     /// most 0.34 %, at h = ln 2; the series below h = 1/16 keeps f32
     /// accuracy);
-    /// see `docs/fractional.md` for the table and the step-cost firmware
+    /// see `docs/fractional.md` for the table and `docs/accuracy-cost.md`
     /// for the cost. On error (`a_t` not finite and positive, or a shifted
     /// ω_i dt that overflows, vanishes or makes an explicit form unstable)
     /// the bank is left as it was.

@@ -8,7 +8,7 @@
 //! `cargo bench -p bushing-sim --bench kernels` (add `-- maxwell` to run
 //! one group). Timings are printed, never asserted.
 
-use bushing::tracker::{Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning, UtParams};
+use bushing::tracker::{Filter, UtParams};
 use bushing::{
     Accumulator, Backbone, Bushing, Compensated, Effect, MaxwellBank, MaxwellForm, Multiplied,
     Plain, Real, XfBank, XfForm, XfSpec,
@@ -50,7 +50,7 @@ fn bushing_pass<B: Backbone<f32>, E: Effect<f32>>(
     b: &Bushing<f32, B, E>,
 ) {
     let (amplitude, period) = bushing_sim::accuracy_cost::families::SINE;
-    let xs = bushing_boards::sine::<CALLS>(amplitude, period);
+    let xs = bushing_boards::sine::<f32, CALLS>(amplitude, period);
     bencher.counter(ItemsCount::new(xs.len())).bench_local(|| {
         let mut state = b.state_at(0.0);
         for &x in &xs {
@@ -100,7 +100,7 @@ fn maxwell8_compensated(bencher: Bencher<'_, '_>) {
 /// The firmware's clamp Iwan banks.
 #[divan::bench(consts = [1, 2, 4, 8, 16, 32, 64])]
 fn iwan<const N: usize>(bencher: Bencher<'_, '_>) {
-    let bank = bushing_boards::iwan_bank::<N>().expect("the firmware's bank");
+    let bank = bushing_boards::iwan_bank::<f32, N>().expect("the firmware's bank");
     effect_pass::<f32, _>(bencher, &bank);
 }
 
@@ -127,7 +127,7 @@ fn grunwald<const N: usize>(bencher: Bencher<'_, '_>) {
 /// Spline backbone + 4 Maxwell + 3 Jenkins.
 #[divan::bench]
 fn default_bushing(bencher: Bencher<'_, '_>) {
-    let b = bushing_boards::default_bushing().expect("the default bushing");
+    let b = bushing_boards::default_bushing::<f32>().expect("the default bushing");
     bushing_pass(bencher, &b);
 }
 
@@ -139,21 +139,7 @@ fn tracker<T: Real>(bencher: Bencher<'_, '_>, filter: &str) {
     } else {
         Filter::Ukf(UtParams::default())
     };
-    let tracker = ModalTracker::<T, 4>::new(
-        1e-3,
-        &[SensorSpec {
-            measured: Measured::Acceleration,
-            noise: 0.01,
-        }],
-        &[ModeInit {
-            frequency: 20.0,
-            damping: 0.01,
-        }],
-        &[(1.0, 0.0)],
-        &Tuning::default(),
-        filter,
-    )
-    .expect("a tracker");
+    let tracker = bushing_boards::modal_tracker::<T>(filter).expect("a tracker");
     let samples: Vec<T> = (0..CALLS)
         .map(|k| T::from_f64((std::f64::consts::TAU * 0.02 * k as f64).cos()))
         .collect();

@@ -273,7 +273,7 @@ fn retune_section(s: &mut String) {
          largest relative error on the storage / loss modulus of the f32 bank against the same\n\
          discrete bank in f64, from 1 mHz to 400 Hz. The cost of each path, in guest instructions on\n\
          a Cortex-M4F, is printed by `cargo run -p bushing-boards --release --target\n\
-         thumbv7em-none-eabihf --bin step-cost`.\n"
+         thumbv7em-none-eabihf --bin kernel-cost` (family `retune`).\n"
     );
     let _ = write!(s, "| a_T |");
     for path in RetunePath::ALL {

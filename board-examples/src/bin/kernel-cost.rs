@@ -29,24 +29,27 @@ mod firmware {
         SineTracker,
     };
     use bushing::tracker::{
-        Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning, UtParams,
+        Filter, Measured, ModalReport, ModalTracker, ModeInit, SensorFit, SensorSpec, Tuning,
+        UtParams, fit_first_period,
     };
     use bushing::{
-        Accumulator, Backbone, Bushing, Compensated, Drive, Effect, EffectOutput, LibmExp,
-        MaxwellForm, MicromathExp, Multiplied, Plain, XfBank, XfForm, XfSpec,
+        Accumulator, Backbone, Bushing, BushingState, Compensated, Drive, Effect, EffectOutput,
+        LibmExp, MaxwellForm, MicromathExp, Multiplied, Plain, Q16, Real, XfBank, XfForm, XfSpec,
     };
-    use bushing::{IwanBank, IwanSliders, OscillatorState, OscillatorStep};
+    use bushing::{
+        Exponentials, IwanBank, IwanSliders, MaxwellBank, OscillatorState, OscillatorStep,
+        ShiftFactor,
+    };
+    use bushing_boards::probe::{self, INSTRUCTIONS_PER_TICK, ticks};
     use bushing_boards::{
         DT, IwanOscillator, berg, bouc_wen, composite, dahl, default_bushing, drives, grunwald,
         iwan_bank, iwan_oscillator, jenkins, maxwell_bank, polynomial, sine, spline, sts16, xf2,
     };
-    use cortex_m::peripheral::{SYST, syst::SystClkSource};
     use cortex_m_rt::entry;
-    use cortex_m_semihosting::{debug, hprintln};
+    use cortex_m_semihosting::hprintln;
     use panic_semihosting as _;
 
     const STEPS: usize = 2000;
-    const INSTRUCTIONS_PER_TICK: u32 = 40;
     /// Sine input: 2 mm amplitude, 100 samples per period (20 periods).
     const AMPLITUDE: f64 = 2.0;
     const PERIOD: usize = 100;
@@ -57,16 +60,10 @@ mod firmware {
         "m3"
     };
 
-    /// SysTick ticks taken by `f` (the counter runs free and counts down).
-    fn ticks(f: impl FnOnce()) -> u32 {
-        let start = SYST::get_current();
-        f();
-        let end = SYST::get_current();
-        start.wrapping_sub(end) & 0x00FF_FFFF
-    }
-
     /// What one measurement printed.
     struct Line<'a> {
+        /// Number type as the report names it (`f32`, `f64`, `fixed`).
+        number: &'a str,
         family: &'a str,
         name: &'a str,
         n: usize,
@@ -85,8 +82,9 @@ mod firmware {
         let gross = tenths(t.saturating_sub(baseline));
         let net = tenths(t.saturating_sub(empty));
         hprintln!(
-            "kernel target={} type=f32 family={} name={} n={} per_call={}.{} net={}.{} state_bytes={} params_bytes={} fn={:#010x}",
+            "kernel target={} type={} family={} name={} n={} per_call={}.{} net={}.{} state_bytes={} params_bytes={} fn={:#010x}",
             TARGET,
+            line.number,
             line.family,
             line.name,
             line.n,
@@ -101,14 +99,18 @@ mod firmware {
     }
 
     #[inline(never)]
-    fn effect_step<E: Effect<f32>>(e: &E, s: &mut E::State, d: &Drive<f32>) -> E::Report {
+    fn effect_step<T: Real, E: Effect<T>>(e: &E, s: &mut E::State, d: &Drive<T>) -> E::Report {
         e.step(s, d)
     }
 
     /// The harness's stand-in for [`effect_step`]: same arguments, a
     /// three-word result, one load.
     #[inline(never)]
-    fn effect_empty<E: Effect<f32>>(_: &E, _: &mut E::State, d: &Drive<f32>) -> EffectOutput<f32> {
+    fn effect_empty<T: Real, E: Effect<T>>(
+        _: &E,
+        _: &mut E::State,
+        d: &Drive<T>,
+    ) -> EffectOutput<T> {
         EffectOutput {
             force: d.dx,
             tangent: d.dx,
@@ -117,23 +119,23 @@ mod firmware {
     }
 
     #[inline(never)]
-    fn effect_force<E: Effect<f32>>(e: &E, s: &mut E::State, d: &Drive<f32>) -> f32 {
+    fn effect_force<T: Real, E: Effect<T>>(e: &E, s: &mut E::State, d: &Drive<T>) -> T {
         e.step_force(s, d)
     }
 
     /// The stand-in for [`effect_force`].
     #[inline(never)]
-    fn force_empty<E: Effect<f32>>(_: &E, _: &mut E::State, d: &Drive<f32>) -> f32 {
+    fn force_empty<T: Real, E: Effect<T>>(_: &E, _: &mut E::State, d: &Drive<T>) -> T {
         d.dx
     }
 
     /// Ticks of `kernel` called over `drives` from a rested state.
-    fn over_drives<E: Effect<f32>, R>(
+    fn over_drives<T: Real, E: Effect<T>, R>(
         e: &E,
-        drives: &[Drive<f32>],
-        kernel: fn(&E, &mut E::State, &Drive<f32>) -> R,
+        drives: &[Drive<T>],
+        kernel: fn(&E, &mut E::State, &Drive<T>) -> R,
     ) -> u32 {
-        let mut s = e.rest(0.0);
+        let mut s = e.rest(T::ZERO);
         ticks(|| {
             for d in drives {
                 black_box(kernel(e, &mut s, black_box(d)));
@@ -141,171 +143,245 @@ mod firmware {
         })
     }
 
-    /// Cost of one `Effect::step_force` of `e` over `drives` (the state
-    /// advanced, the force returned; no energy, no tangent).
-    fn force_only<E: Effect<f32>>(
-        family: &str,
-        name: &str,
-        n: usize,
+    /// Prints the cost of `kernel` called on `e` over `drives`, net of
+    /// `empty` (a stand-in with the same arguments).
+    fn effect_cost<T: Real, E: Effect<T>, R, S>(
+        (family, name, n): (&str, &str, usize),
         e: &E,
-        drives: &[Drive<f32>],
-        baseline: u32,
+        (drives, baseline): (&[Drive<T>], u32),
+        kernel: fn(&E, &mut E::State, &Drive<T>) -> R,
+        empty: fn(&E, &mut E::State, &Drive<T>) -> S,
     ) {
-        let t = over_drives(e, drives, effect_force::<E>);
-        let empty = over_drives(e, drives, force_empty::<E>);
-        let f: fn(&E, &mut E::State, &Drive<f32>) -> f32 = effect_force::<E>;
+        let t = over_drives(e, drives, kernel);
+        let empty = over_drives(e, drives, empty);
         let line = Line {
+            number: number_name::<T>(),
             family,
             name,
             n,
-            state_bytes: size_of_val(&e.rest(0.0)),
+            state_bytes: size_of_val(&e.rest(T::ZERO)),
             params_bytes: size_of_val(e),
-            function: f as usize,
+            function: kernel as usize,
         };
         report(&line, t, empty, baseline, drives.len());
     }
 
-    /// Cost of one `Effect::step` of `e` over `drives`.
-    fn effect<E: Effect<f32, Report = EffectOutput<f32>>>(
-        family: &str,
-        name: &str,
-        n: usize,
+    /// Cost of one `Effect::step_force` of `e` over `drives` (the state
+    /// advanced, the force returned; no energy, no tangent).
+    fn force_only<T: Real, E: Effect<T>>(
+        label: (&str, &str, usize),
         e: &E,
-        drives: &[Drive<f32>],
+        drives: &[Drive<T>],
         baseline: u32,
     ) {
-        let t = over_drives(e, drives, effect_step::<E>);
-        let empty = over_drives(e, drives, effect_empty::<E>);
-        let f: fn(&E, &mut E::State, &Drive<f32>) -> EffectOutput<f32> = effect_step::<E>;
-        let line = Line {
-            family,
-            name,
-            n,
-            state_bytes: size_of_val(&e.rest(0.0)),
-            params_bytes: size_of_val(e),
-            function: f as usize,
-        };
-        report(&line, t, empty, baseline, drives.len());
+        let kernel = effect_force::<T, E>;
+        effect_cost(label, e, (drives, baseline), kernel, force_empty::<T, E>);
+    }
+
+    /// Cost of one `Effect::step` of `e` over `drives`.
+    fn effect<T: Real, E: Effect<T, Report = EffectOutput<T>>>(
+        label: (&str, &str, usize),
+        e: &E,
+        drives: &[Drive<T>],
+        baseline: u32,
+    ) {
+        let kernel = effect_step::<T, E>;
+        effect_cost(label, e, (drives, baseline), kernel, effect_empty::<T, E>);
     }
 
     /// One `Bushing::step`, returning what a rig loop reads: force,
     /// tangent and dissipated energy (the per-branch reports are dropped).
     #[inline(never)]
-    fn bushing_step<B: Backbone<f32>, E: Effect<f32>>(
-        b: &Bushing<f32, B, E>,
-        s: &mut bushing::BushingState<f32, E::State>,
-        x: f32,
-    ) -> [f32; 3] {
+    fn bushing_step<T: Real, B: Backbone<T>, E: Effect<T>>(
+        b: &Bushing<T, B, E>,
+        s: &mut BushingState<T, E::State>,
+        x: T,
+    ) -> [T; 3] {
         let o = b.step(s, x);
         [o.force, o.tangent, o.dissipated]
     }
 
     /// The stand-in for [`bushing_step`].
     #[inline(never)]
-    fn bushing_empty<B: Backbone<f32>, E: Effect<f32>>(
-        _: &Bushing<f32, B, E>,
-        _: &mut bushing::BushingState<f32, E::State>,
-        x: f32,
-    ) -> [f32; 3] {
+    fn bushing_empty<T: Real, B: Backbone<T>, E: Effect<T>>(
+        _: &Bushing<T, B, E>,
+        _: &mut BushingState<T, E::State>,
+        x: T,
+    ) -> [T; 3] {
         [x, x, x]
     }
 
     /// Cost of one `Bushing::step` of `b` over `xs` (force, tangent and
     /// dissipated energy all returned).
-    fn whole<B: Backbone<f32>, E: Effect<f32>>(
-        family: &str,
-        name: &str,
-        n: usize,
-        b: &Bushing<f32, B, E>,
-        xs: &[f32],
+    fn whole<T: Real, B: Backbone<T>, E: Effect<T>>(
+        (family, name, n): (&str, &str, usize),
+        b: &Bushing<T, B, E>,
+        xs: &[T],
         baseline: u32,
     ) {
-        type Kernel<B, E> = fn(
-            &Bushing<f32, B, E>,
-            &mut bushing::BushingState<f32, <E as Effect<f32>>::State>,
-            f32,
-        ) -> [f32; 3];
-        let run = |kernel: Kernel<B, E>| {
-            let mut s = b.state_at(0.0);
+        type Kernel<T, B, E> =
+            fn(&Bushing<T, B, E>, &mut BushingState<T, <E as Effect<T>>::State>, T) -> [T; 3];
+        let run = |kernel: Kernel<T, B, E>| {
+            let mut s = b.state_at(T::ZERO);
             ticks(|| {
                 for x in xs {
                     black_box(kernel(b, &mut s, *black_box(x)));
                 }
             })
         };
-        let t = run(bushing_step::<B, E>);
-        let empty = run(bushing_empty::<B, E>);
-        let f: Kernel<B, E> = bushing_step::<B, E>;
+        let t = run(bushing_step::<T, B, E>);
+        let empty = run(bushing_empty::<T, B, E>);
+        let f: Kernel<T, B, E> = bushing_step::<T, B, E>;
         let line = Line {
+            number: number_name::<T>(),
             family,
             name,
             n,
-            state_bytes: size_of_val(&b.state_at(0.0)),
+            state_bytes: size_of_val(&b.state_at(T::ZERO)),
             params_bytes: size_of_val(b),
             function: f as usize,
         };
         report(&line, t, empty, baseline, xs.len());
     }
 
-    fn maxwell<const N: usize, A: Accumulator<f32>>(
-        kind: &str,
-        drives: &[Drive<f32>],
+    /// The number type as the report names it: Q16 (I16F16) is `fixed`.
+    fn number_name<T: Real>() -> &'static str {
+        match T::NAME {
+            "I16F16" => "fixed",
+            other => other,
+        }
+    }
+
+    /// Every Maxwell form with `N` cells and storage `A` (named `storage`).
+    fn maxwell<T: Real, const N: usize, A: Accumulator<T>>(
+        storage: &str,
+        drives: &[Drive<T>],
         baseline: u32,
     ) {
         for form in MaxwellForm::ALL {
-            let Ok(bank) = maxwell_bank::<N, A>(form) else {
+            let Ok(bank) = maxwell_bank::<T, N, A>(form) else {
                 fail()
             };
             let mut name = heapless_name();
             name.push(form.name());
             name.push("/");
-            name.push(kind);
-            effect("maxwell", name.as_str(), N, &bank, drives, baseline);
-            force_only("maxwell-force", name.as_str(), N, &bank, drives, baseline);
+            name.push(storage);
+            effect(("maxwell", name.as_str(), N), &bank, drives, baseline);
+            force_only(("maxwell-force", name.as_str(), N), &bank, drives, baseline);
         }
     }
 
-    fn iwan<const N: usize>(drives: &[Drive<f32>], baseline: u32) {
-        let Ok(bank) = iwan_bank::<N>() else { fail() };
-        effect("iwan", "clamp/log", N, &bank, drives, baseline);
+    /// Maxwell banks of 1 to 16 cells in every storage.
+    fn maxwell_orders<T: Real>(drives: &[Drive<T>], baseline: u32) {
+        maxwell::<T, 1, Plain<T>>("plain", drives, baseline);
+        maxwell::<T, 2, Plain<T>>("plain", drives, baseline);
+        maxwell::<T, 4, Plain<T>>("plain", drives, baseline);
+        maxwell::<T, 8, Plain<T>>("plain", drives, baseline);
+        maxwell::<T, 16, Plain<T>>("plain", drives, baseline);
+        maxwell::<T, 1, Multiplied<T>>("multiplied", drives, baseline);
+        maxwell::<T, 2, Multiplied<T>>("multiplied", drives, baseline);
+        maxwell::<T, 4, Multiplied<T>>("multiplied", drives, baseline);
+        maxwell::<T, 8, Multiplied<T>>("multiplied", drives, baseline);
+        maxwell::<T, 16, Multiplied<T>>("multiplied", drives, baseline);
+        maxwell::<T, 1, Compensated<T>>("compensated", drives, baseline);
+        maxwell::<T, 2, Compensated<T>>("compensated", drives, baseline);
+        maxwell::<T, 4, Compensated<T>>("compensated", drives, baseline);
+        maxwell::<T, 8, Compensated<T>>("compensated", drives, baseline);
+        maxwell::<T, 16, Compensated<T>>("compensated", drives, baseline);
+    }
+
+    fn iwan<T: Real, const N: usize>(drives: &[Drive<T>], baseline: u32) {
+        let Ok(bank) = iwan_bank::<T, N>() else {
+            fail()
+        };
+        effect(("iwan", "clamp/log", N), &bank, drives, baseline);
+    }
+
+    /// Iwan banks of 1 to 64 cells.
+    fn iwan_orders<T: Real>(drives: &[Drive<T>], baseline: u32) {
+        iwan::<T, 1>(drives, baseline);
+        iwan::<T, 2>(drives, baseline);
+        iwan::<T, 4>(drives, baseline);
+        iwan::<T, 8>(drives, baseline);
+        iwan::<T, 16>(drives, baseline);
+        iwan::<T, 32>(drives, baseline);
+        iwan::<T, 64>(drives, baseline);
+    }
+
+    /// The kernels measured in every number type: Maxwell, Iwan and the
+    /// default bushing, over the same sine.
+    fn in_type<T: Real>() {
+        let xs = sine::<T, STEPS>(AMPLITUDE, PERIOD);
+        let Ok(poly) = polynomial::<T>() else { fail() };
+        let ds = drives(&poly, &xs);
+        let baseline = ticks(|| {
+            for d in &ds {
+                black_box(black_box(d));
+            }
+        });
+        let xs_baseline = ticks(|| {
+            for x in &xs {
+                black_box(*black_box(x));
+            }
+        });
+        maxwell_orders(&ds, baseline);
+        iwan_orders(&ds, baseline);
+        let Ok(b) = default_bushing::<T>() else {
+            fail()
+        };
+        whole(
+            ("bushing", "default/spline+4maxwell+3jenkins", 7),
+            &b,
+            &xs,
+            xs_baseline,
+        );
     }
 
     fn grunwald_cost<const N: usize>(xs: &[f32], baseline: u32) {
         let Ok(b) = grunwald::<N>() else { fail() };
-        whole("grunwald", "bushing/alpha-0.5", N, &b, xs, baseline);
+        whole(("grunwald", "bushing/alpha-0.5", N), &b, xs, baseline);
     }
 
-    type TrackerState = bushing::tracker::ModalState<f32, 4>;
+    type TrackerState<const N: usize> = bushing::tracker::ModalState<f32, N>;
+    type TrackerStep<const N: usize> =
+        fn(&ModalTracker<f32, N>, &mut TrackerState<N>, &[f32]) -> ModalReport;
 
     #[inline(never)]
-    fn tracker_step(
-        t: &ModalTracker<f32, 4>,
-        s: &mut TrackerState,
+    fn tracker_step<const N: usize>(
+        t: &ModalTracker<f32, N>,
+        s: &mut TrackerState<N>,
         y: &[f32],
-    ) -> bushing::tracker::ModalReport {
+    ) -> ModalReport {
         t.step(s, y)
     }
 
     /// The stand-in for [`tracker_step`].
     #[inline(never)]
-    fn tracker_empty(_: &ModalTracker<f32, 4>, _: &mut TrackerState, y: &[f32]) -> f32 {
+    fn tracker_empty<const N: usize>(
+        _: &ModalTracker<f32, N>,
+        _: &mut TrackerState<N>,
+        y: &[f32],
+    ) -> f32 {
         y.first().copied().unwrap_or(0.0)
     }
 
-    fn tracker(name: &str, filter: Filter) {
+    /// One tracker update (predict, then every sensor's scalar update) on a
+    /// 20 Hz sine at 1 kHz seen by `S` accelerometers with mode-shape-like
+    /// factors, `N` states.
+    fn tracker<const N: usize, const S: usize>(name: &str, filter: Filter, modes: &[ModeInit]) {
         let sensors = [SensorSpec {
             measured: Measured::Acceleration,
             noise: 0.01,
-        }];
-        let mode = [ModeInit {
-            frequency: 20.0,
-            damping: 0.01,
-        }];
-        let Ok(tracker) = ModalTracker::<f32, 4>::new(
+        }; S];
+        let amplitudes = [(1.0, 0.0); 8];
+        let Some(amplitudes) = amplitudes.get(..modes.len() * S) else {
+            fail()
+        };
+        let Ok(tracker) = ModalTracker::<f32, N>::new(
             1e-3,
             &sensors,
-            &mode,
-            &[(1.0, 0.0)],
+            modes,
+            amplitudes,
             &Tuning::default(),
             filter,
         ) else {
@@ -313,7 +389,7 @@ mod firmware {
         };
         // A 20 Hz sine at 1 kHz by a rotation recurrence (a few
         // instructions, in every loop below).
-        let run = |kernel: &mut dyn FnMut(&mut TrackerState, f32)| {
+        let run = |kernel: &mut dyn FnMut(&mut TrackerState<N>, &[f32; S])| {
             let mut state = tracker.start();
             let (c, s) = (0.992_114_7f32, 0.125_333_2f32);
             let (mut re, mut im) = (1.0f32, 0.0f32);
@@ -322,28 +398,27 @@ mod firmware {
                     let r = c * re - s * im;
                     im = s * re + c * im;
                     re = r;
-                    kernel(&mut state, re);
+                    let shape = [1.0f32, 2.0, -1.8];
+                    let samples: [f32; S] = core::array::from_fn(|i| re * shape[i % 3]);
+                    kernel(&mut state, &samples);
                 }
             })
         };
         let t = run(&mut |state, y| {
-            black_box(tracker_step(&tracker, state, &[y]));
+            black_box(tracker_step(&tracker, state, y));
         });
         let empty = run(&mut |state, y| {
-            black_box(tracker_empty(&tracker, state, &[y]));
+            black_box(tracker_empty(&tracker, state, y));
         });
         let baseline = run(&mut |_, y| {
             black_box(y);
         });
-        let f: fn(
-            &ModalTracker<f32, 4>,
-            &mut TrackerState,
-            &[f32],
-        ) -> bushing::tracker::ModalReport = tracker_step;
+        let f: TrackerStep<N> = tracker_step::<N>;
         let line = Line {
+            number: "f32",
             family: "tracker",
             name,
-            n: 4,
+            n: N,
             state_bytes: size_of_val(&tracker.start()),
             params_bytes: size_of_val(&tracker),
             function: f as usize,
@@ -375,6 +450,7 @@ mod firmware {
             }
         });
         let line = Line {
+            number: "f32",
             family: "oscillator",
             name: "iwan-20/newmark",
             n: 20,
@@ -446,6 +522,7 @@ mod firmware {
             let _ = black_box(sine_step(&tracker, &mut state, re));
         });
         let line = Line {
+            number: "f32",
             family: "sine-tracker",
             name: "sine/2-states",
             n: 2,
@@ -459,6 +536,7 @@ mod firmware {
             black_box(modulus_step(&modulus, &mut state, re, 0.9 * re - 0.2 * im));
         });
         let line = Line {
+            number: "f32",
             family: "sine-tracker",
             name: "modulus/x-and-f",
             n: 4,
@@ -467,6 +545,147 @@ mod firmware {
             function: modulus_step as *const () as usize,
         };
         report(&line, t, baseline, baseline, STEPS);
+    }
+
+    type Bank8 = MaxwellBank<f32, 8, Plain<f32>>;
+
+    /// A per-call kernel taking a temperature-like scalar.
+    type Call<S> = fn(&mut S, f32) -> bool;
+
+    /// Re-tunes a running bank in place in f32 (16 exponentials by `E`).
+    #[inline(never)]
+    fn retune<E: Exponentials<f32>>(bank: &mut Bank8, a_t: f32) -> bool {
+        bank.retune::<E>(a_t).is_ok()
+    }
+
+    /// Re-tunes by rebuilding the cells from their specifications in f64
+    /// (software double precision on these cores).
+    #[inline(never)]
+    fn retune_f64(bank: &mut Bank8, a_t: f32) -> bool {
+        match bank.shifted(f64::from(a_t)) {
+            Ok(b) => {
+                *bank = b;
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    /// The WLF shift factor `a_T` at a temperature, in f64.
+    #[inline(never)]
+    fn wlf_f64(wlf: &mut ShiftFactor, t: f32) -> bool {
+        black_box(wlf.at(f64::from(t))).is_ok()
+    }
+
+    /// The WLF shift factor `a_T` at a temperature, in f32 by `E`.
+    #[inline(never)]
+    fn wlf_f32<E: Exponentials<f32>>(wlf: &mut ShiftFactor, t: f32) -> bool {
+        black_box(wlf.at_in::<f32, E>(t)).is_ok()
+    }
+
+    /// The stand-in for the calls above.
+    #[inline(never)]
+    fn call_empty<S>(_: &mut S, x: f32) -> bool {
+        x > 0.0
+    }
+
+    /// Cost of `kernel` called with 1.0, 1.01, 1.02, ... plus `offset`.
+    fn call_cost<S>(
+        (family, name, n): (&str, &str, usize),
+        subject: &mut S,
+        offset: f32,
+        kernel: Call<S>,
+    ) {
+        let calls = STEPS / 10;
+        let mut run = |kernel: Call<S>| {
+            ticks(|| {
+                for k in 0..calls {
+                    let x = offset + 1.0 + black_box(k as f32) * 1e-2;
+                    black_box(kernel(subject, x));
+                }
+            })
+        };
+        let t = run(kernel);
+        let empty = run(call_empty::<S>);
+        let line = Line {
+            number: "f32",
+            family,
+            name,
+            n,
+            state_bytes: 0,
+            params_bytes: size_of_val(subject),
+            function: kernel as usize,
+        };
+        report(&line, t, empty, empty, calls);
+    }
+
+    /// Re-tuning 8 running Maxwell cells to a new temperature, and the WLF
+    /// shift factor that gives it, by libm and micromath in f32 and in f64.
+    fn temperature() {
+        let Ok(mut bank) = maxwell_bank::<f32, 8, Plain<f32>>(MaxwellForm::RateExactRamp) else {
+            fail()
+        };
+        let f = ("retune", "retune-8/libm", 8);
+        call_cost(f, &mut bank, 0.0, retune::<LibmExp>);
+        let f = ("retune", "retune-8/micromath", 8);
+        call_cost(f, &mut bank, 0.0, retune::<MicromathExp>);
+        let f = ("retune", "retune-8/f64", 8);
+        call_cost(f, &mut bank, 0.0, retune_f64);
+        let Ok(mut wlf) = ShiftFactor::wlf(17.44, 51.6, 20.0) else {
+            fail()
+        };
+        // Temperatures from 20 degC up.
+        call_cost(
+            ("retune", "wlf/libm", 1),
+            &mut wlf,
+            19.0,
+            wlf_f32::<LibmExp>,
+        );
+        call_cost(
+            ("retune", "wlf/micromath", 1),
+            &mut wlf,
+            19.0,
+            wlf_f32::<MicromathExp>,
+        );
+        call_cost(("retune", "wlf/f64", 1), &mut wlf, 19.0, wlf_f64);
+    }
+
+    #[inline(never)]
+    fn fit(record: &[f64; 50], out: &mut [SensorFit; 1]) -> u32 {
+        fit_first_period(1e-3, &[record], out).map_or(0, |f| f.iterations)
+    }
+
+    /// Start values of the modal tracker: the least-squares fit of one
+    /// noisy 50-sample pseudo-period, in f64 (software double precision on
+    /// these cores).
+    fn first_period_fit() {
+        let mut record = [0.0f64; 50];
+        let (c, s) = (0.992_114_701_314_478_f64, 0.125_333_233_564_304_2_f64);
+        let (mut re, mut im) = (1.0f64, 0.0f64);
+        for (k, x) in record.iter_mut().enumerate() {
+            // A 1e-3 deterministic pseudo-noise, so that the fit iterates.
+            *x = re + 1e-3 * ((k * 7919 % 13) as f64 - 6.0) / 6.0;
+            let r = 0.999 * (c * re - s * im);
+            im = 0.999 * (s * re + c * im);
+            re = r;
+        }
+        let mut out = [SensorFit::default()];
+        let calls = 10;
+        let t = ticks(|| {
+            for _ in 0..calls {
+                black_box(fit(black_box(&record), &mut out));
+            }
+        });
+        let line = Line {
+            number: "f64",
+            family: "tracker",
+            name: "first-period-fit/50-samples",
+            n: 50,
+            state_bytes: 0,
+            params_bytes: size_of_val(&record),
+            function: fit as *const () as usize,
+        };
+        report(&line, t, 0, 0, calls);
     }
 
     /// A short fixed-capacity name.
@@ -500,17 +719,12 @@ mod firmware {
 
     #[entry]
     fn main() -> ! {
-        let Some(p) = cortex_m::Peripherals::take() else {
+        probe::start();
+
+        let xs = sine::<f32, STEPS>(AMPLITUDE, PERIOD);
+        let Ok(poly) = polynomial::<f32>() else {
             fail()
         };
-        let mut syst = p.SYST;
-        syst.set_clock_source(SystClkSource::Core);
-        syst.set_reload(0x00FF_FFFF);
-        syst.clear_current();
-        syst.enable_counter();
-
-        let xs = sine::<STEPS>(AMPLITUDE, PERIOD);
-        let Ok(poly) = polynomial() else { fail() };
         let ds = drives(&poly, &xs);
         let baseline = ticks(|| {
             for d in &ds {
@@ -530,28 +744,9 @@ mod firmware {
             DT
         );
 
-        maxwell::<1, Plain<f32>>("plain", &ds, baseline);
-        maxwell::<2, Plain<f32>>("plain", &ds, baseline);
-        maxwell::<4, Plain<f32>>("plain", &ds, baseline);
-        maxwell::<8, Plain<f32>>("plain", &ds, baseline);
-        maxwell::<16, Plain<f32>>("plain", &ds, baseline);
-        maxwell::<1, Multiplied<f32>>("multiplied", &ds, baseline);
-        maxwell::<2, Multiplied<f32>>("multiplied", &ds, baseline);
-        maxwell::<4, Multiplied<f32>>("multiplied", &ds, baseline);
-        maxwell::<8, Multiplied<f32>>("multiplied", &ds, baseline);
-        maxwell::<16, Multiplied<f32>>("multiplied", &ds, baseline);
-        maxwell::<1, Compensated<f32>>("compensated", &ds, baseline);
-        maxwell::<2, Compensated<f32>>("compensated", &ds, baseline);
-        maxwell::<4, Compensated<f32>>("compensated", &ds, baseline);
-        maxwell::<8, Compensated<f32>>("compensated", &ds, baseline);
-        maxwell::<16, Compensated<f32>>("compensated", &ds, baseline);
-
-        iwan::<1>(&ds, baseline);
-        iwan::<2>(&ds, baseline);
-        iwan::<4>(&ds, baseline);
-        iwan::<8>(&ds, baseline);
-        iwan::<16>(&ds, baseline);
-        iwan::<32>(&ds, baseline);
+        in_type::<f32>();
+        in_type::<f64>();
+        in_type::<Q16>();
 
         for form in XfForm::ALL {
             let Ok(bank) = XfBank::<f32, 1>::new(form, &[XfSpec::hz(5.0, 0.1, 0.02)], DT) else {
@@ -561,60 +756,50 @@ mod firmware {
                 XfForm::Midpoint => "midpoint",
                 XfForm::ExactRamp => "exact-ramp",
             };
-            effect("xf", name, 1, &bank, &ds, baseline);
+            effect(("xf", name, 1), &bank, &ds, baseline);
         }
 
         let Ok(b) = Bushing::new(poly, ()) else {
             fail()
         };
-        whole("backbone", "polynomial-4", 1, &b, &xs, xs_baseline);
-        let Ok(spl) = spline() else { fail() };
+        whole(("backbone", "polynomial-4", 1), &b, &xs, xs_baseline);
+        let Ok(spl) = spline::<f32>() else { fail() };
         let Ok(b) = Bushing::new(spl, ()) else { fail() };
-        whole("backbone", "spline-8", 1, &b, &xs, xs_baseline);
-        let Ok(b) = default_bushing() else { fail() };
-        whole(
-            "bushing",
-            "default/spline+4maxwell+3jenkins",
-            7,
-            &b,
-            &xs,
-            xs_baseline,
-        );
+        whole(("backbone", "spline-8", 1), &b, &xs, xs_baseline);
         let Ok(b) = sts16() else { fail() };
-        whole("sts", "stack-16", 16, &b, &xs, xs_baseline);
+        whole(("sts", "stack-16", 16), &b, &xs, xs_baseline);
 
         grunwald_cost::<16>(&xs, xs_baseline);
         grunwald_cost::<64>(&xs, xs_baseline);
         grunwald_cost::<256>(&xs, xs_baseline);
+        grunwald_cost::<1024>(&xs, xs_baseline);
 
         // Friction and smooth hysteresis cells on the polynomial backbone.
         for (alpha, name) in [(1.0, "dahl/alpha-1"), (0.5, "dahl/alpha-0.5")] {
             let Ok(b) = dahl(alpha) else { fail() };
-            whole("friction", name, 1, &b, &xs, xs_baseline);
+            whole(("friction", name, 1), &b, &xs, xs_baseline);
         }
         for (n, name) in [(2.0, "bouc-wen/n-2"), (8.0, "bouc-wen/n-8")] {
             let Ok(b) = bouc_wen(n) else { fail() };
-            whole("friction", name, 1, &b, &xs, xs_baseline);
+            whole(("friction", name, 1), &b, &xs, xs_baseline);
         }
         let Ok(b) = berg() else { fail() };
-        whole("friction", "berg", 1, &b, &xs, xs_baseline);
+        whole(("friction", "berg", 1), &b, &xs, xs_baseline);
         let Ok(bank) = IwanSliders::<f32, 16>::new(&jenkins::<16>(), 150.0) else {
             fail()
         };
-        effect("iwan", "slider/log", 16, &bank, &ds, baseline);
+        effect(("iwan", "slider/log", 16), &bank, &ds, baseline);
         for form in XfForm::ALL {
             let Ok(b) = xf2(form) else { fail() };
             let name = match form {
                 XfForm::Midpoint => "bushing/midpoint-2",
                 XfForm::ExactRamp => "bushing/exact-ramp-2",
             };
-            whole("xf", name, 2, &b, &xs, xs_baseline);
+            whole(("xf", name, 2), &b, &xs, xs_baseline);
         }
         let Ok(b) = composite() else { fail() };
         whole(
-            "bushing",
-            "final/poly+3maxwell+3jenkins+1xf",
-            7,
+            ("bushing", "final/poly+3maxwell+3jenkins+1xf", 7),
             &b,
             &xs,
             xs_baseline,
@@ -622,47 +807,32 @@ mod firmware {
         oscillator();
         sine_trackers();
 
-        tracker("ekf/1-mode-1-acc", Filter::Ekf);
-        tracker("ukf/1-mode-1-acc", Filter::Ukf(UtParams::default()));
-
-        // Re-tuning 8 running cells to a new temperature: exponentials in
-        // f32 by libm or micromath.
-        let Ok(mut bank) = maxwell_bank::<8, Plain<f32>>(MaxwellForm::RateExactRamp) else {
-            fail()
+        // The modal tracker: one mode on one accelerometer (4 states), then
+        // two modes on three accelerometers (16 states).
+        let mode = ModeInit {
+            frequency: 20.0,
+            damping: 0.01,
         };
-        for (name, micromath) in [("retune-8/libm", false), ("retune-8/micromath", true)] {
-            let t = ticks(|| {
-                for k in 0..STEPS / 10 {
-                    let a_t = 1.0 + black_box(k as f32) * 1e-2;
-                    let _ = black_box(if micromath {
-                        bank.retune::<MicromathExp>(a_t)
-                    } else {
-                        bank.retune::<LibmExp>(a_t)
-                    });
-                }
-            });
-            let line = Line {
-                family: "retune",
-                name,
-                n: 8,
-                state_bytes: 0,
-                params_bytes: size_of_val(&bank),
-                function: 0,
-            };
-            report(&line, t, 0, 0, STEPS / 10);
-        }
-        debug::exit(debug::EXIT_SUCCESS);
-        loop {
-            cortex_m::asm::nop();
-        }
+        let two = [
+            mode,
+            ModeInit {
+                frequency: 51.0,
+                damping: 0.005,
+            },
+        ];
+        let ukf = Filter::Ukf(UtParams::default());
+        tracker::<4, 1>("ekf/1-mode-1-acc", Filter::Ekf, &[mode]);
+        tracker::<4, 1>("ukf/1-mode-1-acc", ukf, &[mode]);
+        tracker::<16, 3>("ekf/2-modes-3-acc", Filter::Ekf, &two);
+        tracker::<16, 3>("ukf/2-modes-3-acc", ukf, &two);
+
+        first_period_fit();
+        temperature();
+        probe::pass()
     }
 
     fn fail() -> ! {
-        hprintln!("parameters refused");
-        debug::exit(debug::EXIT_FAILURE);
-        loop {
-            cortex_m::asm::nop();
-        }
+        probe::fail("parameters refused")
     }
 }
 

@@ -57,12 +57,11 @@
 //!   polynomial and `e^λ` run only when an anchor moves. Below 8 states
 //!   (one mode) the whole step is unrolled on a copy of the state held in
 //!   registers. No f64, no libm trig and no square root per sample.
-//!   Guest instructions per call on Cortex-M4F (QEMU, f32; `cargo run -q -p
-//!   bushing-boards --release --target thumbv7em-none-eabihf --bin
-//!   step-cost`): one mode and one accelerometer (4 states) EKF 295, UKF
-//!   910; two modes and three accelerometers (16 states) EKF 15 282, UKF
-//!   107 022. Called through a non-inlined function, as `--bin kernel-cost`
-//!   does, the 4-state EKF costs 344 and the UKF 1002.
+//!   Guest instructions per call of `step` through a non-inlined function
+//!   on Cortex-M4F (QEMU, f32; `cargo run -q -p bushing-boards --release
+//!   --target thumbv7em-none-eabihf --bin kernel-cost`, family `tracker`):
+//!   one mode and one accelerometer (4 states) EKF 346, UKF 1002; two modes
+//!   and three accelerometers (16 states) EKF 15 283, UKF 107 020.
 
 use super::fast::{exp_small, is_f32, min_positive, rsqrt};
 use super::trig::{sin_cos, sin_cos_in_range};

@@ -67,7 +67,7 @@ impl<T> StateName for Compensated<T> {
 
 /// The corner frequencies of the firmware's `N`-cell Maxwell bank.
 pub fn maxwell_specs<const N: usize>() -> Result<[MaxwellSpec; N], ParamError> {
-    Ok(*bushing_boards::maxwell_bank::<N, Plain<f32>>(MaxwellForm::RateExactRamp)?.specs())
+    Ok(*bushing_boards::maxwell_bank::<f32, N, Plain<f32>>(MaxwellForm::RateExactRamp)?.specs())
 }
 
 /// The working type's name in the report: `fixed` for `Q16` (I16F16),

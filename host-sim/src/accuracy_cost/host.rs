@@ -13,7 +13,7 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
-use bushing::tracker::{Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning, UtParams};
+use bushing::tracker::{Filter, UtParams};
 use bushing::{
     Accumulator, Backbone, Bushing, Compensated, Drive, Effect, LibmExp, MaxwellBank, MaxwellForm,
     MicromathExp, Multiplied, Plain, Real, XfBank, XfForm, XfSpec,
@@ -36,14 +36,14 @@ pub struct HostKernel {
 
 fn sine() -> Vec<f32> {
     let (amplitude, period) = super::families::SINE;
-    bushing_boards::sine::<CALLS>(amplitude, period).to_vec()
+    bushing_boards::sine::<f32, CALLS>(amplitude, period).to_vec()
 }
 
 /// The drives of the firmware's sine on its polynomial backbone, in `T`
 /// (widened from the f32 ones).
 pub fn drives<T: Real>() -> Result<Vec<Drive<T>>, String> {
-    let poly = bushing_boards::polynomial().map_err(|e| e.to_string())?;
-    let xs = bushing_boards::sine::<CALLS>(super::families::SINE.0, super::families::SINE.1);
+    let poly = bushing_boards::polynomial::<f32>().map_err(|e| e.to_string())?;
+    let xs = bushing_boards::sine::<f32, CALLS>(super::families::SINE.0, super::families::SINE.1);
     let to = |v: f32| T::from_f64(f64::from(v));
     Ok(bushing_boards::drives(&poly, &xs)
         .iter()
@@ -129,7 +129,7 @@ fn maxwell_kernels<T: Real + 'static, A: Accumulator<T> + StateName + 'static, c
 }
 
 fn iwan_kernel<const N: usize>(out: &mut Vec<HostKernel>) -> Result<(), String> {
-    let bank = bushing_boards::iwan_bank::<N>().map_err(|e| e.to_string())?;
+    let bank = bushing_boards::iwan_bank::<f32, N>().map_err(|e| e.to_string())?;
     out.push(effect_kernel(
         Key::new("iwan", "clamp/log", N, "f32"),
         bank,
@@ -174,21 +174,7 @@ fn tracker_kernels<T: Real + 'static>(out: &mut Vec<HostKernel>) -> Result<(), S
         ("ekf/1-mode-1-acc", Filter::Ekf),
         ("ukf/1-mode-1-acc", Filter::Ukf(UtParams::default())),
     ] {
-        let tracker = ModalTracker::<T, 4>::new(
-            1e-3,
-            &[SensorSpec {
-                measured: Measured::Acceleration,
-                noise: 0.01,
-            }],
-            &[ModeInit {
-                frequency: 20.0,
-                damping: 0.01,
-            }],
-            &[(1.0, 0.0)],
-            &Tuning::default(),
-            filter,
-        )
-        .map_err(|e| e.to_string())?;
+        let tracker = bushing_boards::modal_tracker::<T>(filter).map_err(|e| e.to_string())?;
         let mut state = tracker.start();
         let (c, s) = (
             T::from_f64((std::f64::consts::TAU * 0.02).cos()),
@@ -217,8 +203,9 @@ fn retune_kernels(out: &mut Vec<HostKernel>) -> Result<(), String> {
         ("retune-8/micromath", 1),
         ("retune-8/f64-shifted", 2),
     ] {
-        let mut bank = bushing_boards::maxwell_bank::<8, Plain<f32>>(MaxwellForm::RateExactRamp)
-            .map_err(|e| e.to_string())?;
+        let mut bank =
+            bushing_boards::maxwell_bank::<f32, 8, Plain<f32>>(MaxwellForm::RateExactRamp)
+                .map_err(|e| e.to_string())?;
         let mut k = 0u32;
         out.push(HostKernel {
             key: Key::new("retune", name, 8, "f32"),
@@ -271,8 +258,8 @@ pub fn kernels() -> Result<Vec<HostKernel>, String> {
     xf_kernels::<f64>(&mut out)?;
     xf_kernels::<f32>(&mut out)?;
     let s = sine();
-    let poly = bushing_boards::polynomial().map_err(|e| e.to_string())?;
-    let spline = bushing_boards::spline().map_err(|e| e.to_string())?;
+    let poly = bushing_boards::polynomial::<f32>().map_err(|e| e.to_string())?;
+    let spline = bushing_boards::spline::<f32>().map_err(|e| e.to_string())?;
     out.push(bushing_kernel(
         Key::new("backbone", "polynomial-4", 1, "f32"),
         Bushing::new(poly, ()).map_err(|e| e.to_string())?,
@@ -285,7 +272,7 @@ pub fn kernels() -> Result<Vec<HostKernel>, String> {
     ));
     out.push(bushing_kernel(
         Key::new("bushing", "default/spline+4maxwell+3jenkins", 7, "f32"),
-        bushing_boards::default_bushing().map_err(|e| e.to_string())?,
+        bushing_boards::default_bushing::<f32>().map_err(|e| e.to_string())?,
         s.clone(),
     ));
     out.push(bushing_kernel(

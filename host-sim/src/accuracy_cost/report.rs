@@ -99,8 +99,33 @@ fn per_call(lines: &mut Lines, what: &str, limit: f64, key: (&str, &str, usize))
     }
 }
 
+/// Errors closer than this to a peer's count as equal: 1e-3 % on f0 and
+/// 1e-3 points on the damping ratio, twenty times below the tracker's RMS
+/// error over noise realisations on its acceptance grid (0.017 % and 0.018
+/// points, `docs/modal-tracker.md`); the amplitude error within 10 % of the
+/// peer's.
+const SAME_F0_PCT: f64 = 1e-3;
+const SAME_DAMPING_PTS: f64 = 1e-3;
+const SAME_AMPLITUDE_RATIO: f64 = 1.1;
+
+/// True when `ours` is at least as accurate as `peer` on frequency,
+/// damping and amplitude (each within the tolerances above).
+fn as_accurate(ours: &PeerLine, peer: &PeerLine) -> bool {
+    let within = |o: Option<f64>, p: Option<f64>, slack: f64, ratio: f64| match (o, p) {
+        (Some(o), Some(p)) => o <= p * ratio + slack,
+        // A diverged peer is beaten by any finite estimate.
+        (Some(_), None) => true,
+        (None, _) => false,
+    };
+    within(ours.freq_err_pct, peer.freq_err_pct, SAME_F0_PCT, 1.0)
+        && within(ours.damp_err_pts, peer.damp_err_pts, SAME_DAMPING_PTS, 1.0)
+        && within(ours.amp_rms, peer.amp_rms, 0.0, SAME_AMPLITUDE_RATIO)
+}
+
 /// The one-third rule, per peer source and unit: our cheapest tracker
-/// against the cheapest peer crate, at equal or better accuracy.
+/// against the cheapest peer crate, at equal or better accuracy (on f0,
+/// damping and amplitude; [`as_accurate`]). The issue states it in guest
+/// instructions; host nanoseconds are compared too, for the record.
 fn third_rule(peers: &[PeerLine]) -> Vec<Goal> {
     let mut groups: BTreeMap<(String, String), Vec<&PeerLine>> = BTreeMap::new();
     for p in peers {
@@ -125,15 +150,7 @@ fn third_rule(peers: &[PeerLine]) -> Vec<Goal> {
             });
             continue;
         };
-        let as_good = |p: &&&PeerLine| match (
-            p.freq_err_pct,
-            best.freq_err_pct,
-            p.damp_err_pts,
-            best.damp_err_pts,
-        ) {
-            (Some(f), Some(bf), Some(d), Some(bd)) => f <= bf && d <= bd,
-            _ => false,
-        };
+        let as_good = |p: &&&PeerLine| as_accurate(p, best);
         let ours = lines
             .iter()
             .filter(|p| p.is_ours())
@@ -233,7 +250,14 @@ pub(super) fn goals(lines: &mut Lines, peers: &[PeerLine]) -> Vec<Goal> {
             ("tracker", "ukf/1-mode-1-acc", 4),
         ),
     ];
-    out.extend(third_rule(peers));
+    // The rule is on guest instructions; host times are shown with the
+    // peer table.
+    let counted: Vec<PeerLine> = peers
+        .iter()
+        .filter(|p| p.unit == "instructions")
+        .cloned()
+        .collect();
+    out.extend(third_rule(&counted));
     out
 }
 
@@ -536,8 +560,8 @@ pub(super) fn markdown(
     }
     let _ = writeln!(
         s,
-        "## Targets\n\nGuest instructions on the Cortex-M4F: {} of {} met; the others are being \
-         worked on.\n\n\
+        "## Targets\n\nThe issue's bounds, in guest instructions on the Cortex-M4F: {} of {} \
+         met.\n\n\
          | target | at most | measured | verdict | how |\n|---|---|---|---|---|",
         goals.iter().filter(|g| g.met()).count(),
         goals.len()
@@ -705,7 +729,14 @@ pub(super) fn markdown(
     } else {
         let _ = writeln!(
             s,
-            "From `kalman-peers`: the same signal through each crate's filter.\n\n\
+            "From `kalman-peers`: the same signal through each crate's filter (problem, data and \
+             update forms in the binary's documentation). The one-third rule compares our cheapest \
+             tracker that is as accurate as the cheapest peer: final f0 and damping errors within \
+             {SAME_F0_PCT} % and {SAME_DAMPING_PTS} points of the peer's, amplitude error within \
+             {SAME_AMPLITUDE_RATIO} times. `ours-*` run the default tuning, which fades a mode whose \
+             amplitude sinks below 3 noise deviations (frequency and damping frozen): this record \
+             decays below that after about 2.8 s, hence their amplitude error; `ours-*-nofade` run \
+             the same plain filter as the peers.\n\n\
              | source | name | crate | filter | cost | unit | f0 error % | damping error pts | amplitude RMS |\n\
              |---|---|---|---|---|---|---|---|---|"
         );
@@ -719,9 +750,24 @@ pub(super) fn markdown(
                 cell(&p.filter),
                 sig(p.cost),
                 cell(&p.unit),
-                num(p.freq_err_pct, 4),
-                num(p.damp_err_pts, 4),
-                num(p.amp_rms, 4)
+                num(p.freq_err_pct, 6),
+                num(p.damp_err_pts, 6),
+                num(p.amp_rms, 6)
+            );
+        }
+        let _ = writeln!(
+            s,
+            "\nOur cheapest as-accurate tracker over the cheapest peer, per file (the rule \
+             counts Cortex-M4F guest instructions; the host's times are shown for the record: \
+             an out-of-order x86 core narrows the gap):\n"
+        );
+        for g in third_rule(peers) {
+            let _ = writeln!(
+                s,
+                "- {}: {} ({})",
+                g.what,
+                g.measured.map_or_else(|| "-".into(), sig),
+                g.note
             );
         }
     }
@@ -842,4 +888,47 @@ pub(super) fn svg(rows: &[Row]) -> String {
         &points,
         &fams,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(name: &str, krate: &str, cost: f64, errors: [f64; 3]) -> PeerLine {
+        PeerLine {
+            name: name.into(),
+            krate: krate.into(),
+            filter: "ekf".into(),
+            cost,
+            unit: "instructions".into(),
+            freq_err_pct: Some(errors[0]),
+            damp_err_pts: Some(errors[1]),
+            amp_rms: Some(errors[2]),
+            source: "m4f".into(),
+        }
+    }
+
+    #[test]
+    fn rounding_level_differences_count_as_equal_accuracy() {
+        let peer = line("p", "peer@1", 3000.0, [4.5e-4, 3.1e-4, 3.85e-3]);
+        let ours = line("o", "bushing", 330.0, [4.6e-4, 3.5e-4, 3.84e-3]);
+        assert!(as_accurate(&ours, &peer));
+        let goals = third_rule(&[peer, ours]);
+        assert_eq!(goals.len(), 1);
+        let ratio = goals[0].measured.expect("comparable");
+        assert!((ratio - 0.11).abs() < 1e-12, "{ratio}");
+    }
+
+    #[test]
+    fn a_cheaper_but_less_accurate_tracker_is_not_compared() {
+        let peer = line("p", "peer@1", 3000.0, [4.5e-4, 3.1e-4, 3.85e-3]);
+        // The amplitude far off (a faded mode), then the frequency.
+        let faded = line("o", "bushing", 330.0, [4.5e-4, 3.1e-4, 0.31]);
+        let biased = line("o", "bushing", 330.0, [0.01, 3.1e-4, 3.85e-3]);
+        assert!(!as_accurate(&faded, &peer));
+        assert!(!as_accurate(&biased, &peer));
+        let goals = third_rule(&[peer, faded]);
+        assert_eq!(goals[0].measured, None);
+        assert!(goals[0].note.contains("less accurate"), "{}", goals[0].note);
+    }
 }
