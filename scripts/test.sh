@@ -6,8 +6,9 @@
 #   2. core-nostd builds for Cortex-M4F (thumbv7em-none-eabihf) and
 #      Cortex-M3 without FPU (thumbv7m-none-eabi), in floating and fixed
 #      point;
-#   3. the Cortex-M suite under QEMU: M4F debug and release, M3 release;
-#      QEMU's exit code is the verdict, a hang is killed by `timeout`;
+#   3. the Cortex-M suite under QEMU: M4F debug and release, M3 release,
+#      and the named hard cases on both cores; QEMU's exit code is the
+#      verdict, a hang is killed by `timeout`;
 #   4. the accuracy-cost report in its quick mode: the kernel-cost firmware
 #      on both cores under QEMU, the peer Kalman crates on the host and in
 #      QEMU, and the generator (into target/, so that it cannot rot);
@@ -59,7 +60,7 @@ step "lints (Cortex-M4F: core, suite, firmware)"
 cargo clippy -p bushing --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing --features micromath --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing --features fixed --target thumbv7m-none-eabi -- -D warnings
-cargo clippy -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m -- -D warnings
+cargo clippy -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m --test hard_cases -- -D warnings
 cargo clippy -p bushing-boards --target thumbv7em-none-eabihf --bins -- -D warnings
 cargo clippy -p bushing-boards --features peers --bins -- -D warnings
 cargo clippy -p bushing-boards --features peers --target thumbv7em-none-eabihf --bins -- -D warnings
@@ -75,6 +76,10 @@ cargo test -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m --rel
 
 step "Cortex-M suite in QEMU: M3 (mps2-an385), soft float, release"
 cargo test -p bushing-tests --target thumbv7m-none-eabi --test cortex_m --release
+
+step "named hard cases in QEMU: M4F and M3, release (docs/hard-cases.md)"
+cargo test -p bushing-tests --target thumbv7em-none-eabihf --test hard_cases --release
+cargo test -p bushing-tests --target thumbv7m-none-eabi --test hard_cases --release
 
 step "accuracy-cost report, quick mode (kernel-cost and kalman-peers in QEMU)"
 ./scripts/accuracy-cost.sh --quick

@@ -9,6 +9,8 @@
 
 use core::fmt;
 
+pub mod hard;
+
 use bushing::{
     Backbone, Berg, BoucWen, Bushing, Compensated, Dahl, Effect, EffectOutput, Exponentials,
     Faults, FractionalSpec, Grunwald, IwanBank, IwanCellSpec, IwanSliders, LibmExp, MaxwellBank,
@@ -518,7 +520,7 @@ fn golden_trace_f32() -> CaseResult {
     }
 }
 
-fn param(_: ParamError) -> Failure {
+pub(crate) fn param(_: ParamError) -> Failure {
     Failure {
         what: "parameters refused",
         got: 1.0,
@@ -646,7 +648,7 @@ fn iwan_slider_equals_clamp_f32() -> CaseResult {
 }
 
 /// Steady sliding at a = |dx| / x_f per step, omega = 0: force over g K x_f.
-fn xf_saturation<T: Real>(form: XfForm, a: f64) -> Result<f64, Failure> {
+pub(crate) fn xf_saturation<T: Real>(form: XfForm, a: f64) -> Result<f64, Failure> {
     let (g, k, x_f) = (0.5, 10.0, 0.2);
     let bank = XfBank::<T, 1>::new(form, &[XfSpec { omega: 0.0, g, x_f }], 1e-3).map_err(param)?;
     let b = Bushing::new(Polynomial::<T, 2>::linear(k).map_err(param)?, (bank,)).map_err(param)?;
@@ -945,7 +947,7 @@ fn temperature_retune_f32<E: Exponentials<f32>>() -> CaseResult {
 
 type StsBushing<const M: usize> = Bushing<f32, Polynomial<f32, 2>, (TurningPoints<Sts<f32>, M>,)>;
 
-fn sts_bushing<const M: usize>() -> Result<StsBushing<M>, Failure> {
+pub(crate) fn sts_bushing<const M: usize>() -> Result<StsBushing<M>, Failure> {
     let law = Sts::new(400.0, 300.0).map_err(param)?;
     Bushing::new(
         Polynomial::linear(100.0).map_err(param)?,
