@@ -87,6 +87,9 @@ step "accuracy-cost report, quick mode (kernel-cost and kalman-peers in QEMU)"
 step "host tests"
 cargo test
 
+step "fuzz targets build (run them with cargo fuzz: docs/hard-cases.md)"
+cargo check --quiet --manifest-path fuzz/Cargo.toml --target-dir target/fuzz-check
+
 step "every scene, with the README's command form (run SCENE --out DIR)"
 cargo build -q -p bushing-sim --release
 find scenes -name '*.toml' | sort | while read -r scene; do

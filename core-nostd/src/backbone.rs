@@ -73,6 +73,20 @@ impl<T: Real, const N: usize> Polynomial<T, N> {
         tangent_positive_on(&c, lo, hi)?;
         let (f_lo, k_lo) = horner(&c, lo);
         let (f_hi, k_hi) = horner(&c, hi);
+        // Coefficients and end values valid in f64 must fit the working type.
+        if let Some(i) = c.iter().position(|&v| !T::from_f64(v).is_finite()) {
+            return Err(ParamError::NotFinite {
+                param: Param::item("coefficients", i),
+            });
+        }
+        if [f_lo, k_lo, f_hi, k_hi]
+            .iter()
+            .any(|&v| !T::from_f64(v).is_finite())
+        {
+            return Err(ParamError::NotFinite {
+                param: Param::scalar("range"),
+            });
+        }
         Ok(Self {
             coeffs: c.map(T::from_f64),
             lo: T::from_f64(lo),
@@ -239,6 +253,13 @@ impl<T: Real> Piece<T> {
         (f, k)
     }
 
+    /// Every coefficient finite in the working type.
+    fn fits(&self) -> bool {
+        [self.x0, self.a, self.b, self.c, self.d, self.c2, self.d3]
+            .iter()
+            .all(|v| v.is_finite())
+    }
+
     fn new(x0: f64, a: f64, b: f64, c: f64, d: f64) -> Self {
         Self {
             x0: T::from_f64(x0),
@@ -350,6 +371,13 @@ impl<T: Real, const N: usize> MonotoneSpline<T, N> {
             *piece = last;
         }
         let below = Piece::new(at(xs, 0), at(forces, 0), slope(0), 0.0, 0.0);
+        // Points valid in f64 whose cubic coefficients overflow the working
+        // type (points far apart in force and close in x).
+        if let Some(i) = pieces.iter().take(n).position(|p| !p.fits()) {
+            return Err(ParamError::NotFinite {
+                param: Param::item("force", i),
+            });
+        }
         Ok(Self {
             pieces,
             below,
@@ -401,6 +429,18 @@ impl<T: Real, const N: usize> Backbone<T> for MonotoneSpline<T, N> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn coefficients_that_overflow_the_working_type_are_refused() {
+        // 1e39 is finite in f64 and infinite in f32, where Horner's scheme
+        // would give inf * 0 = NaN at x = 0. Found by the step_models fuzzer.
+        let c = [0.0, 1000.0, 1e39, 2.0];
+        let r = Polynomial::<f32, 4>::new(&c, (0.0, 12.0));
+        assert!(matches!(r, Err(ParamError::NotFinite { .. })), "{r:?}");
+        assert!(Polynomial::<f64, 4>::new(&c, (0.0, 12.0)).is_ok());
+        let r = MonotoneSpline::<f32, 4>::new(&[0.0, 1e-30, 1.0], &[0.0, 1e30, 2e30]);
+        assert!(matches!(r, Err(ParamError::NotFinite { .. })), "{r:?}");
+    }
 
     fn central_difference<B: Backbone<f64>>(b: &B, x: f64) -> f64 {
         let e = 1e-6 * (1.0 + x.abs());

@@ -302,7 +302,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
         let mut faults = Faults::NONE;
         let mut x = x0;
         let (mut f, mut k) = self.backbone.eval(x);
-        if !x.is_finite() || !within_guard(f, k) {
+        if !x.is_finite() || !within_guard(x, f, k) {
             faults.raise(if x.is_finite() {
                 Faults::OUT_OF_RANGE
             } else {
@@ -332,7 +332,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
             return refuse(state, self.g0, Faults::NON_FINITE_INPUT);
         }
         let (f_inf, k_inf) = self.backbone.eval(x);
-        if !within_guard(f_inf, k_inf) {
+        if !within_guard(x, f_inf, k_inf) {
             return refuse(state, self.g0, Faults::OUT_OF_RANGE);
         }
         let drive = Drive {
@@ -344,6 +344,11 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
         };
         let report = self.effects.step(&mut state.effects, &drive);
         let total = E::total(&report);
+        let dissipated = if total.dissipated.is_finite() {
+            total.dissipated
+        } else {
+            overflowed(state)
+        };
         let elastic = self.g0 * f_inf;
         let force = elastic + total.force;
         let tangent = self.g0 * k_inf + total.tangent;
@@ -354,7 +359,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
         Output {
             force,
             tangent,
-            dissipated: total.dissipated,
+            dissipated,
             elastic,
             effects: Some(report),
         }
@@ -376,9 +381,22 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
     }
 }
 
+/// The displacement and the backbone's force within the guard (the
+/// hysteresis laws work on displacement distances, the energies on squared
+/// forces), and the tangent positive (the construction proves it in f64; a
+/// tangent that rounds to zero in the working type would make the
+/// dissipated energy 0/0) and within the guard.
 #[inline(always)]
-fn within_guard<T: Real>(f: T, k: T) -> bool {
-    f.abs() <= T::GUARD && k.abs() <= T::GUARD
+fn within_guard<T: Real>(x: T, f: T, k: T) -> bool {
+    x.abs() <= T::GUARD && f.abs() <= T::GUARD && k > T::ZERO && k <= T::GUARD
+}
+
+/// Flags a step whose dissipated energy left the working type; it counts
+/// as zero.
+#[cold]
+fn overflowed<T: Real, S>(state: &mut BushingState<T, S>) -> T {
+    state.faults.raise(Faults::ENERGY_OVERFLOW);
+    T::ZERO
 }
 
 #[cold]
@@ -409,6 +427,53 @@ mod tests {
 
     fn cubic() -> Polynomial<f64, 4> {
         Polynomial::new(&[1.0, 100.0, 0.0, 2.0], (-5.0, 5.0)).unwrap()
+    }
+
+    #[test]
+    fn a_tangent_that_underflows_in_the_working_type_is_refused() {
+        // Accepted in f64 (positive), zero once rounded to f32: the
+        // dissipated energy would be 0/0. Found by the step_models fuzzer.
+        let flat = Polynomial::<f32, 2>::new(&[0.0, 1e-300], (-1.0, 1.0)).unwrap();
+        let specs = [MaxwellSpec::new(2.0, 0.2)];
+        let bank = MaxwellBank::<f32, 1>::new(MaxwellForm::RateExactRamp, &specs, 1e-3).unwrap();
+        let b = Bushing::new(flat, (bank,)).unwrap();
+        let mut s = b.state_at(0.0);
+        let out = b.step(&mut s, 0.0);
+        assert!(out.effects.is_none() && out.dissipated == 0.0);
+        assert!(s.faults().contains(Faults::OUT_OF_RANGE));
+    }
+
+    #[test]
+    fn an_energy_that_overflows_is_flagged_and_the_step_kept() {
+        // A load-exponential bank re-tuned by a_T = 1e-37: ω·dt ~ 1e36, the
+        // branch does not relax in a step and its energy h/g F² overflows
+        // f32. Found by the step_models fuzzer.
+        let specs = [MaxwellSpec::hz(1.0, 0.2), MaxwellSpec::hz(50.0, 0.2)];
+        let mut bank =
+            MaxwellBank::<f32, 2>::new(MaxwellForm::LoadExponential, &specs, 1e-3).unwrap();
+        bank.retune::<crate::LibmExp>(1e-37).unwrap();
+        let backbone = Polynomial::<f32, 4>::new(&[0.0, 150.0, 0.0, 4.0], (-6.0, 6.0)).unwrap();
+        let b = Bushing::new(backbone, (bank,)).unwrap();
+        let mut s = b.state_at(0.0);
+        let out = b.step(&mut s, -10.0);
+        assert!(out.effects.is_some() && out.force.is_finite() && out.tangent.is_finite());
+        assert_eq!(out.dissipated, 0.0);
+        assert!(s.faults().contains(Faults::ENERGY_OVERFLOW));
+    }
+
+    #[test]
+    fn a_displacement_beyond_the_guard_is_refused_on_a_soft_backbone() {
+        // 1e38 mm on a backbone of 1e-37 N/mm is a force of 10 N, but a
+        // turning-point law would square the distance. Found by the
+        // step_models fuzzer.
+        let soft = Polynomial::<f32, 2>::new(&[0.0, 1e-37], (-1.0, 1.0)).unwrap();
+        let law = crate::stack::Sts::<f32>::new(600.0, 1000.0).unwrap();
+        let stack = crate::stack::TurningPoints::<_, 8>::new(law, crate::FirstLoading::Ignored);
+        let b = Bushing::new(soft, (stack,)).unwrap();
+        let mut s = b.state_at(0.0);
+        let out = b.step(&mut s, -2.7e38);
+        assert!(out.effects.is_none() && out.force.is_finite());
+        assert!(s.faults().contains(Faults::OUT_OF_RANGE));
     }
 
     #[test]

@@ -39,7 +39,9 @@ impl fmt::Display for Param {
 /// names the parameter and the bound it breaks.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ParamError {
-    /// The value is NaN or infinite.
+    /// The value is NaN or infinite, or a coefficient derived from it
+    /// overflows the working type (a Maxwell cell whose ω·dt is too large
+    /// for its energy coefficient ω·dt/g).
     NotFinite {
         /// Offending parameter.
         param: Param,
@@ -231,6 +233,27 @@ pub(crate) fn positive(param: Param, value: f64) -> Result<f64, ParamError> {
     }
 }
 
+/// Checks that `value` is positive and that it and its reciprocal fit the
+/// working type: `value` in `[1/GUARD, GUARD]` (8.7e-19 to 1.2e18 in f32).
+/// For parameters whose reciprocal is stored, so that neither rounds to
+/// zero nor overflows in `T`.
+pub(crate) fn scaled<T: crate::Real>(param: Param, value: f64) -> Result<f64, ParamError> {
+    let value = positive(param, value)?;
+    let max = T::GUARD.to_f64();
+    let min = 1.0 / max;
+    if value < min || value > max {
+        Err(ParamError::OutOfRange {
+            param,
+            value,
+            min,
+            min_open: false,
+            max,
+        })
+    } else {
+        Ok(value)
+    }
+}
+
 /// Checks that `value` is finite and in `[min, max]` (`min` excluded when
 /// `min_open`).
 pub(crate) fn in_range(
@@ -274,8 +297,15 @@ impl Faults {
     pub const NONE: Self = Self(0);
     /// An input was NaN or infinite.
     pub const NON_FINITE_INPUT: Self = Self(1);
-    /// The backbone force or tangent at the input exceeded [`crate::Real::GUARD`].
+    /// The input displacement, or the backbone force or tangent there,
+    /// exceeded [`crate::Real::GUARD`], or the tangent was not positive in
+    /// the working type (a stiffness that underflows there).
     pub const OUT_OF_RANGE: Self = Self(2);
+    /// The dissipated energy of a step was not finite in the working type
+    /// (a very stiff cell under a force near the guard, or a tangent near
+    /// zero): the step was taken, its force and tangent are valid, and it
+    /// reports no dissipated energy.
+    pub const ENERGY_OVERFLOW: Self = Self(4);
 
     /// True if no flag is raised.
     pub const fn is_empty(self) -> bool {

@@ -28,7 +28,7 @@
 //! so the history is one ring buffer of the last N values of u.
 
 use crate::bushing::{Drive, Effect, EffectOutput};
-use crate::error::{Param, ParamError, positive};
+use crate::error::{Param, ParamError, positive, scaled};
 use crate::real::Real;
 
 /// Parameters of a fractional cell.
@@ -144,6 +144,7 @@ impl<T: Real, const N: usize> Grunwald<T, N> {
     /// (0, 1], a non-positive ω_c, g outside (0, 1] and a non-positive dt.
     pub fn new(spec: FractionalSpec, dt: f64) -> Result<Self, ParamError> {
         spec.validate()?;
+        scaled::<T>(Param::scalar("g"), spec.g)?;
         let dt = positive(Param::scalar("dt"), dt)?;
         if N == 0 {
             return Err(ParamError::TooFew {

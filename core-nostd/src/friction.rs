@@ -16,7 +16,7 @@
 //! loop the Dahl and Bouc-Wen energies equal the loop area.
 
 use crate::bushing::{Drive, Effect, EffectOutput};
-use crate::error::{Param, ParamError, positive};
+use crate::error::{Param, ParamError, positive, scaled};
 use crate::real::Real;
 
 /// State shared by the single cells: last x and force (and, for Berg, the
@@ -90,8 +90,8 @@ pub struct Dahl<T> {
 impl<T: Real> Dahl<T> {
     /// `k_d`: initial stiffness (N/mm); `f_f`: friction force (N); `alpha` > 0.
     pub fn new(k_d: f64, f_f: f64, alpha: f64) -> Result<Self, ParamError> {
-        let k_d = positive(Param::scalar("k_d"), k_d)?;
-        let f_f = positive(Param::scalar("f_f"), f_f)?;
+        let k_d = scaled::<T>(Param::scalar("k_d"), k_d)?;
+        let f_f = scaled::<T>(Param::scalar("f_f"), f_f)?;
         let alpha = positive(Param::scalar("alpha"), alpha)?;
         let unit = alpha == 1.0;
         Ok(Self {
@@ -183,17 +183,22 @@ pub struct BoucWen<T> {
 impl<T: Real> BoucWen<T> {
     /// Parameters as in eq 1.44: `alpha` (N/mm), `a`, `beta`, `gamma`, `n`.
     pub fn new(alpha: f64, a: f64, beta: f64, gamma: f64, n: f64) -> Result<Self, ParamError> {
-        let alpha = positive(Param::scalar("alpha"), alpha)?;
-        let a = positive(Param::scalar("a"), a)?;
-        let beta = positive(Param::scalar("beta"), beta)?;
-        let n = positive(Param::scalar("n"), n)?;
+        let alpha = scaled::<T>(Param::scalar("alpha"), alpha)?;
+        let a = scaled::<T>(Param::scalar("a"), a)?;
+        let beta = scaled::<T>(Param::scalar("beta"), beta)?;
+        let n = scaled::<T>(Param::scalar("n"), n)?;
         if !(gamma.is_finite() && gamma.abs() < beta) {
             return Err(ParamError::NotPositive {
                 param: Param::scalar("beta - |gamma|"),
                 value: beta - gamma.abs(),
             });
         }
-        let w_u = libm::pow(a / (beta + gamma), 1.0 / n);
+        // The ultimate displacement (a / (beta + gamma))^(1/n) must fit the
+        // working type (a small n raises it to a large power).
+        let w_u = scaled::<T>(
+            Param::scalar("(a / (beta + gamma))^(1/n)"),
+            libm::pow(a / (beta + gamma), 1.0 / n),
+        )?;
         Ok(Self {
             alpha: T::from_f64(alpha),
             a: T::from_f64(a),
@@ -299,27 +304,32 @@ impl<T: Real> BoucWen<T> {
 /// - **Dissipation**: the branch is H(d) = M d / (c + d), M = F_fmax - s F_T,
 ///   c = x_2 M / F_fmax, whose equivalent Iwan dissipates
 ///   `|ẋ| M d² / (2 (c + d)²)`.
-/// - **Cost**: one division per step (by a denominator >= x_2 (1 - |F_T| /
-///   F_fmax) > 0), a few multiply-adds.
+/// - **Cost**: two divisions per step (by denominators >= max(x_2 (1 -
+///   |F_T| / F_fmax), 2^-24 x_2) > 0: the floor keeps a branch that starts
+///   saturated flat instead of 0/0), a few multiply-adds.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Berg<T> {
     f_max: T,
     x2: T,
     inv_x2: T,
     inv_f_max: T,
+    /// Floor of c, 2^-24 x_2: rounding can bring |F_T| to F_fmax, where c
+    /// would vanish and a branch starting at its turning point divide 0/0.
+    c_min: T,
 }
 
 impl<T: Real> Berg<T> {
     /// `f_max`: the largest friction force (N); `x2`: the displacement at
     /// which half of it is reached from rest (mm).
     pub fn new(f_max: f64, x2: f64) -> Result<Self, ParamError> {
-        let f_max = positive(Param::scalar("f_max"), f_max)?;
-        let x2 = positive(Param::scalar("x2"), x2)?;
+        let f_max = scaled::<T>(Param::scalar("f_max"), f_max)?;
+        let x2 = scaled::<T>(Param::scalar("x2"), x2)?;
         Ok(Self {
             f_max: T::from_f64(f_max),
             x2: T::from_f64(x2),
             inv_x2: T::from_f64(1.0 / x2),
             inv_f_max: T::from_f64(1.0 / f_max),
+            c_min: T::from_f64(x2 * libm::ldexp(1.0, -24)),
         })
     }
 }
@@ -338,11 +348,11 @@ impl<T: Real> Berg<T> {
             st.f_turn = st.force;
         }
         let m = self.f_max - s * st.f_turn;
-        let c = self.x2 * m * self.inv_f_max;
+        let c = (self.x2 * m * self.inv_f_max).max(self.c_min);
         let d0 = (st.x - st.x_turn).abs();
         let d1 = (x - st.x_turn).abs();
         // The only divisions of the three cells' explicit updates, by
-        // c + d >= c = x_2 (1 - |F_T| / F_fmax) > 0.
+        // c + d >= c = max(x_2 (1 - |F_T| / F_fmax), 2^-24 x_2) > 0.
         let q0 = d0 / (c + d0);
         let inv_den = T::ONE / (c + d1);
         let q1 = d1 * inv_den;
@@ -405,6 +415,44 @@ mod tests {
     use crate::backbone::Polynomial;
     use crate::bushing::Bushing;
     use crate::xf::{XfBank, XfForm, XfSpec};
+
+    #[test]
+    fn berg_reversal_from_a_saturated_force_stays_finite() {
+        // Far travel rounds |F| to F_fmax; a tiny step up and back then
+        // reverses at a turning force of F_fmax, where c = 0 made the
+        // branch 0/0. Found by the step_models fuzzer.
+        let b = Bushing::new(
+            Polynomial::<f32, 2>::linear(150.0).unwrap(),
+            (Berg::<f32>::new(17.058468, 0.6624918).unwrap(),),
+        )
+        .unwrap();
+        let mut s = b.state_at(0.0);
+        for x in [-1e7f32, 0.0, 3.5e-44, 0.0, -1.0] {
+            let out = b.step(&mut s, x);
+            assert!(
+                out.force.is_finite() && out.tangent.is_finite(),
+                "at {x}: {out:?}"
+            );
+            assert!(out.dissipated.is_finite() && out.dissipated >= 0.0);
+        }
+    }
+
+    #[test]
+    fn parameters_whose_reciprocal_leaves_the_working_type_are_refused() {
+        // x2 = 1e-40 is positive in f64 and zero in f32, where 1/x2 would
+        // be infinite. Found by the step_models fuzzer.
+        let r = Berg::<f32>::new(40.0, 1e-40);
+        assert!(matches!(r, Err(ParamError::OutOfRange { .. })), "{r:?}");
+        assert!(Berg::<f64>::new(40.0, 1e-40).is_ok());
+        assert!(matches!(
+            Dahl::<f32>::new(1e30, 1.0, 1.0),
+            Err(ParamError::OutOfRange { .. })
+        ));
+        assert!(matches!(
+            XfBank::<f32, 1>::new(XfForm::ExactRamp, &[XfSpec::hz(1.0, 0.1, 1e-30)], 1e-3),
+            Err(ParamError::OutOfRange { .. })
+        ));
+    }
 
     fn run<E: Effect<f64, Report = EffectOutput<f64>>>(
         e: E,

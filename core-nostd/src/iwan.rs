@@ -51,7 +51,7 @@
 //!   Cortex-M4F, force, tangent and energy included (`scripts/accuracy-cost.sh`).
 
 use crate::bushing::{Drive, Effect, EffectOutput};
-use crate::error::{Param, ParamError, positive};
+use crate::error::{Param, ParamError, positive, scaled};
 use crate::real::Real;
 
 /// One Jenkins cell: load fraction and slip force.
@@ -123,6 +123,9 @@ impl<T: Real> ClampCell<T> {
     /// Coefficients of cell `index`.
     pub fn new(spec: IwanCellSpec, index: usize) -> Result<Self, ParamError> {
         let (g, f) = spec.check(index)?;
+        // Both, and the energy factor F_f / g, must fit the working type.
+        scaled::<T>(Param::item("g", index), g)?;
+        scaled::<T>(Param::item("slip_force", index), f)?;
         Ok(Self {
             g: T::from_f64(g),
             limit: T::from_f64(f),
@@ -315,6 +318,11 @@ impl<T: Real> SliderCell<T> {
     pub fn new(spec: IwanCellSpec, k_ref: f64, index: usize) -> Result<Self, ParamError> {
         let (g, f) = spec.check(index)?;
         let k = g * positive(Param::scalar("k_ref"), k_ref)?;
+        // The cell's stiffness and its reach F_f / k must fit the working
+        // type.
+        scaled::<T>(Param::item("g k_ref", index), k)?;
+        scaled::<T>(Param::item("slip_force", index), f)?;
+        scaled::<T>(Param::item("slip_force / (g k_ref)", index), f / k)?;
         Ok(Self {
             k: T::from_f64(k),
             reach: T::from_f64(f / k),
@@ -398,6 +406,22 @@ impl<T: Real, const N: usize> Effect<T> for IwanSliders<T, N> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cells_that_leave_the_working_type_are_refused() {
+        // g = 1e-45 is positive in f64 and zero in f32 (a slider's reach
+        // F_f / k would be infinite). Found by the step_models fuzzer.
+        let tiny = [IwanCellSpec::new(1e-45, 1.0)];
+        assert!(matches!(
+            IwanBank::<f32, 1>::new(&tiny),
+            Err(ParamError::OutOfRange { .. })
+        ));
+        assert!(matches!(
+            IwanSliders::<f32, 1>::new(&tiny, 150.0),
+            Err(ParamError::OutOfRange { .. })
+        ));
+        assert!(IwanBank::<f64, 1>::new(&tiny).is_ok());
+    }
     use crate::backbone::{Backbone, Polynomial};
     use crate::bushing::Bushing;
     use alloc::vec;

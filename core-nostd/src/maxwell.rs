@@ -186,13 +186,20 @@ impl<T: Real> MaxwellCell<T> {
             });
         }
         let c = coefficients::<f64, LibmExp>(form, h, g, index)?;
+        // The same check as in `coefficients`, in the working type.
+        let loss = T::from_f64(c.loss);
+        if !loss.is_finite() {
+            return Err(ParamError::NotFinite {
+                param: Param::item("omega", index),
+            });
+        }
         Ok(Self {
             decay: T::from_f64(c.decay),
             keep: T::from_f64(c.keep),
             rate_gain: T::from_f64(c.rate_gain),
             level_gain: T::from_f64(c.level_gain),
             g: T::from_f64(g),
-            loss: T::from_f64(c.loss),
+            loss,
             tangent: c.tangent,
         })
     }
@@ -234,13 +241,22 @@ fn coefficients<U: Real, E: Exponentials<U>>(
     };
     // dF_branch/dF^inf_n: p + q, plus g for the load forms.
     let tangent = p + q + if form.is_load() { g } else { U::ZERO };
+    // A cell so stiff that its energy coefficient h/g overflows the working
+    // type (ω·dt near its largest value) would make every step's
+    // dissipated energy infinite or NaN.
+    let loss = h / g;
+    if !loss.is_finite() || !tangent.is_finite() {
+        return Err(ParamError::NotFinite {
+            param: Param::item("omega", index),
+        });
+    }
     Ok(MaxwellCell {
         decay,
         keep: U::ONE - decay,
         rate_gain: p,
         level_gain: q,
         g,
-        loss: h / g,
+        loss,
         tangent: tangent.to_f64(),
     })
 }
@@ -591,6 +607,24 @@ mod tests {
         MaxwellSpec::new(30.0, 0.2),
         MaxwellSpec::new(300.0, 0.15),
     ];
+
+    #[test]
+    fn cells_whose_energy_coefficient_overflows_are_refused() {
+        // ω·dt = 1e306 is finite in f64, its loss h/g is not in f32; a
+        // shift factor of 1e-39 does the same to a running bank. Found by
+        // the step_models fuzzer.
+        let huge = [MaxwellSpec::new(1e308, 0.5)];
+        let r = MaxwellBank::<f32, 1>::new(MaxwellForm::RateExactRamp, &huge, 1e-2);
+        assert!(matches!(r, Err(ParamError::NotFinite { .. })), "{r:?}");
+        assert!(MaxwellBank::<f64, 1>::new(MaxwellForm::RateExactRamp, &huge, 1e-2).is_ok());
+        let mut bank = MaxwellBank::<f32, 3>::new(MaxwellForm::RateMidpoint, &SPECS, 1e-3).unwrap();
+        let before = bank.clone();
+        assert!(matches!(
+            bank.retune::<LibmExp>(1e-39),
+            Err(ParamError::NotFinite { .. })
+        ));
+        assert_eq!(bank, before);
+    }
 
     #[test]
     fn explicit_forms_refuse_omega_dt_at_or_above_one() {

@@ -47,7 +47,7 @@
 //!   [`Sts`]).
 
 use crate::bushing::{Drive, Effect, EffectOutput};
-use crate::error::{Param, ParamError, finite, positive};
+use crate::error::{Param, ParamError, finite, scaled};
 use crate::real::Real;
 
 /// A hysteretic relaxation law: the force gained along a branch.
@@ -72,9 +72,11 @@ impl<T: Real> Sts<T> {
     /// stiffness), `k1` = K_1 (N/mm), the hysteretic stiffness at a
     /// turning point.
     pub fn new(c: f64, k1: f64) -> Result<Self, ParamError> {
-        let c = positive(Param::scalar("c"), c)?;
-        let k1 = positive(Param::scalar("k1"), k1)?;
-        let a = c / k1;
+        // C, K_1 and the distance C/K_1 (squared in the law) must fit the
+        // working type.
+        let c = scaled::<T>(Param::scalar("c"), c)?;
+        let k1 = scaled::<T>(Param::scalar("k1"), k1)?;
+        let a = scaled::<T>(Param::scalar("c / k1"), c / k1)?;
         Ok(Self {
             two_c: T::from_f64(2.0 * c),
             c: T::from_f64(c),

@@ -40,7 +40,7 @@
 //!   adds one division); the energy adds 3 and one division per bank.
 
 use crate::bushing::{Drive, Effect, EffectOutput};
-use crate::error::{Param, ParamError, positive};
+use crate::error::{Param, ParamError, positive, scaled};
 use crate::real::Real;
 
 /// Discrete form of an x_f cell.
@@ -113,16 +113,28 @@ impl<T: Real> XfCell<T> {
                 value: spec.omega,
             });
         }
-        let g = positive(Param::item("g", index), spec.g)?;
+        let g = scaled::<T>(Param::item("g", index), spec.g)?;
         if g > 1.0 {
             return Err(ParamError::CellFractionAboveOne {
                 cell: Some(index),
                 g,
             });
         }
-        let x_f = positive(Param::item("x_f", index), spec.x_f)?;
+        let x_f = scaled::<T>(Param::item("x_f", index), spec.x_f)?;
+        // ω·dt must fit the working type (below its guard).
+        let h = spec.omega * dt;
+        let max = T::GUARD.to_f64();
+        if h > max {
+            return Err(ParamError::OutOfRange {
+                param: Param::item("omega dt", index),
+                value: h,
+                min: 0.0,
+                min_open: false,
+                max,
+            });
+        }
         Ok(Self {
-            h: T::from_f64(spec.omega * dt),
+            h: T::from_f64(h),
             inv_xf: T::from_f64(1.0 / x_f),
             g: T::from_f64(g),
             inv_g: T::from_f64(1.0 / g),

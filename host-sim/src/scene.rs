@@ -718,6 +718,12 @@ impl Scene {
             .map_err(|e| err(Some(bb_span.clone()), format!("backbone: {e}")))?
             .eval(0.0)
             .1;
+        // The same checks in the working type, where a value valid in f64
+        // may overflow or vanish.
+        if run.number == NumberType::F32 {
+            crate::model::backbone::<f32>(&backbone)
+                .map_err(|e| err(Some(bb_span.clone()), format!("backbone (f32): {e}")))?;
+        }
 
         let mut effects = Vec::new();
         let mut seen = Vec::new();
@@ -734,7 +740,11 @@ impl Scene {
                 ));
             }
             seen.push(kind);
-            let effect = validate_effect(spec, dt, k_at_rest)
+            let checked = match run.number {
+                NumberType::F32 => validate_effect::<f32>(spec, dt, k_at_rest),
+                NumberType::F64 => validate_effect::<f64>(spec, dt, k_at_rest),
+            };
+            let effect = checked
                 .map_err(|m| err(Some(span.clone()), format!("effects[{i}] ({kind}): {m}")))?;
             effects.push(effect);
         }
@@ -802,7 +812,14 @@ impl Scene {
     }
 }
 
-fn validate_effect(spec: EffectSpec, dt: f64, k_at_rest: f64) -> Result<Effect, String> {
+/// Checks an effect table by building its cells in the working type `T`
+/// (every parameter check of the core, including the values that leave
+/// `T`).
+fn validate_effect<T: bushing::Real>(
+    spec: EffectSpec,
+    dt: f64,
+    k_at_rest: f64,
+) -> Result<Effect, String> {
     match spec {
         EffectSpec::Maxwell { form, state, cells } => {
             let form = MaxwellForm::from_name(&form).ok_or_else(|| {
@@ -825,7 +842,7 @@ fn validate_effect(spec: EffectSpec, dt: f64, k_at_rest: f64) -> Result<Effect, 
                 cells.iter().map(|c| MaxwellSpec::hz(c.f_hz, c.g)).collect();
             // Build each cell once to run every parameter check of the core.
             for (i, c) in cells.iter().enumerate() {
-                bushing::MaxwellCell::<f64>::new(form, *c, dt, i).map_err(|e| e.to_string())?;
+                bushing::MaxwellCell::<T>::new(form, *c, dt, i).map_err(|e| e.to_string())?;
             }
             let sum: f64 = cells.iter().map(|c| c.g).sum();
             if sum > 1.0 + 1e-12 {
@@ -860,7 +877,7 @@ fn validate_effect(spec: EffectSpec, dt: f64, k_at_rest: f64) -> Result<Effect, 
                 })
                 .collect::<Result<Vec<_>, _>>()?;
             for (i, c) in cells.iter().enumerate() {
-                bushing::iwan::SliderCell::<f64>::new(*c, k_ref, i).map_err(|e| e.to_string())?;
+                bushing::iwan::SliderCell::<T>::new(*c, k_ref, i).map_err(|e| e.to_string())?;
             }
             Ok(Effect::Iwan {
                 slider,
@@ -887,14 +904,14 @@ fn validate_effect(spec: EffectSpec, dt: f64, k_at_rest: f64) -> Result<Effect, 
             };
             let law = match (law.as_str(), c, k1, d, k) {
                 ("sts", Some(c), Some(k1), None, None) => {
-                    Sts::<f64>::new(c, k1).map_err(|e| e.to_string())?;
+                    Sts::<T>::new(c, k1).map_err(|e| e.to_string())?;
                     Law::Sts { c, k1 }
                 }
                 ("sts", ..) => {
                     return Err("law 'sts' takes c (N²/mm) and k1 (N/mm), and no d or k".into());
                 }
                 ("table", None, None, Some(d), Some(k)) => {
-                    KfTable::<f64, TABLE_POINTS>::new(&d, &k).map_err(|e| e.to_string())?;
+                    KfTable::<T, TABLE_POINTS>::new(&d, &k).map_err(|e| e.to_string())?;
                     Law::Table { d, k }
                 }
                 ("table", ..) => {
@@ -913,21 +930,21 @@ fn validate_effect(spec: EffectSpec, dt: f64, k_at_rest: f64) -> Result<Effect, 
                 .map(|c| XfSpec::hz(c.f_hz, c.g, c.x_f))
                 .collect();
             for (i, c) in cells.iter().enumerate() {
-                bushing::xf::XfCell::<f64>::new(*c, dt, i).map_err(|e| e.to_string())?;
+                bushing::xf::XfCell::<T>::new(*c, dt, i).map_err(|e| e.to_string())?;
             }
             Ok(Effect::Xf { form, cells })
         }
         EffectSpec::Dahl(p) => {
-            bushing::Dahl::<f64>::new(p.k_d, p.f_f, p.alpha).map_err(|e| e.to_string())?;
+            bushing::Dahl::<T>::new(p.k_d, p.f_f, p.alpha).map_err(|e| e.to_string())?;
             Ok(Effect::Friction(Friction::Dahl(p)))
         }
         EffectSpec::BoucWen(p) => {
-            bushing::BoucWen::<f64>::new(p.alpha, p.a, p.beta, p.gamma, p.n)
+            bushing::BoucWen::<T>::new(p.alpha, p.a, p.beta, p.gamma, p.n)
                 .map_err(|e| e.to_string())?;
             Ok(Effect::Friction(Friction::BoucWen(p)))
         }
         EffectSpec::Berg(p) => {
-            bushing::Berg::<f64>::new(p.f_max, p.x2).map_err(|e| e.to_string())?;
+            bushing::Berg::<T>::new(p.f_max, p.x2).map_err(|e| e.to_string())?;
             Ok(Effect::Friction(Friction::Berg(p)))
         }
     }
