@@ -21,7 +21,7 @@ use bushing::{
     tracker::{Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning},
 };
 
-use super::{Failure, Noise, param, sts_bushing, xf_saturation};
+use super::{Failure, Noise, demo32, param, sts_bushing, xf_saturation};
 
 /// What a case measures: the figure, or why it could not be measured.
 pub type Measure = Result<f64, Failure>;
@@ -892,21 +892,8 @@ fn temperature_retune_refused_keeps_bank() -> Measure {
 // ---------------------------------------------------------------------------
 // Inputs
 
-type Demo = Bushing<f32, Polynomial<f32, 4>, (MaxwellBank<f32, 3>,)>;
-
-fn demo() -> Result<Demo, Failure> {
-    let specs = [
-        MaxwellSpec::hz(0.5, 0.1),
-        MaxwellSpec::hz(5.0, 0.1),
-        MaxwellSpec::hz(50.0, 0.1),
-    ];
-    let bank = MaxwellBank::new(MaxwellForm::RateExactRamp, &specs, 1e-3).map_err(param)?;
-    let bb = Polynomial::new(&[0.0, 200.0, 0.0, 8.0], (-5.0, 5.0)).map_err(param)?;
-    Bushing::new(bb, (bank,)).map_err(param)
-}
-
 fn non_finite_inputs_keep_state() -> Measure {
-    let b = demo()?;
+    let b = demo32()?;
     let mut s = b.state_at(0.0);
     for n in 0..100 {
         b.step(&mut s, n as f32 * 0.01);
@@ -924,7 +911,7 @@ fn non_finite_inputs_keep_state() -> Measure {
 }
 
 fn huge_inputs_refused_then_recover() -> Measure {
-    let b = demo()?;
+    let b = demo32()?;
     let mut s = b.state_at(0.5);
     let mut wrong = 0.0;
     for huge in [1e30f32, -1e30] {

@@ -355,9 +355,10 @@ fn tangent_matches_central_difference_f64() -> CaseResult {
     at_most("relative tangent error, all forms", worst, 1e-6)
 }
 
-type Demo32 = Bushing<f32, Polynomial<f32, 4>, (MaxwellBank<f32, 3>,)>;
+pub(crate) type Demo32 = Bushing<f32, Polynomial<f32, 4>, (MaxwellBank<f32, 3>,)>;
 
-fn demo32() -> Result<Demo32, Failure> {
+/// A hardening backbone with three exact-ramp Maxwell cells, f32, 1 kHz.
+pub(crate) fn demo32() -> Result<Demo32, Failure> {
     let specs = [
         MaxwellSpec::hz(0.5, 0.1),
         MaxwellSpec::hz(5.0, 0.1),
