@@ -12,7 +12,9 @@
 #   4. the accuracy-cost report in its quick mode: the kernel-cost firmware
 #      on both cores under QEMU, the peer Kalman crates on the host and in
 #      QEMU, and the generator (into target/, so that it cannot rot);
-#   5. the host tests (unit, integration, doc);
+#   5. the host tests (unit, integration, doc), the firmware drivers on
+#      embedded-hal-mock, and the rig loop of scripts/rig-loop.sh: both
+#      firmwares in QEMU against bushing-sim, and the panic-never link check;
 #   6. every scene of scenes/ run with the README's command form;
 #   7. a scene's cost against its parts in host instructions (callgrind),
 #      printed, never asserted.
@@ -62,6 +64,7 @@ cargo clippy -p bushing --features micromath --target thumbv7em-none-eabihf -- -
 cargo clippy -p bushing --features fixed --target thumbv7m-none-eabi -- -D warnings
 cargo clippy -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m --test hard_cases -- -D warnings
 cargo clippy -p bushing-boards --target thumbv7em-none-eabihf --bins -- -D warnings
+cargo clippy -p bushing-boards --target thumbv7m-none-eabi --bins -- -D warnings
 cargo clippy -p bushing-boards --features peers --bins -- -D warnings
 cargo clippy -p bushing-boards --features peers --target thumbv7em-none-eabihf --bins -- -D warnings
 
@@ -86,6 +89,10 @@ step "accuracy-cost report, quick mode (kernel-cost and kalman-peers in QEMU)"
 
 step "host tests"
 cargo test
+cargo test -p bushing-boards --lib
+
+step "rig-loop firmware in QEMU against bushing-sim, panic-never link check"
+./scripts/rig-loop.sh
 
 step "fuzz targets build (run them with cargo fuzz: docs/hard-cases.md)"
 cargo check --quiet --manifest-path fuzz/Cargo.toml --target-dir target/fuzz-check

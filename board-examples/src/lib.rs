@@ -1,10 +1,14 @@
 //! Shared pieces of the firmware examples: the kernels whose cost is
 //! measured, built the way a rig firmware builds them.
 #![no_std]
-#![forbid(unsafe_code)]
+// Only `memory` (linker symbols and stack painting) needs `unsafe`.
+#![deny(unsafe_code)]
 
 #[cfg(target_os = "none")]
+pub mod memory;
+#[cfg(target_os = "none")]
 pub mod probe;
+pub mod rig;
 
 use core::f64::consts::PI;
 

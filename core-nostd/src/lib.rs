@@ -75,6 +75,7 @@ pub mod backbone;
 pub mod bushing;
 pub mod discretize;
 pub mod error;
+pub mod excitation;
 #[cfg(feature = "fixed")]
 pub mod fixed;
 pub mod fractional;

@@ -39,7 +39,6 @@ use bushing::{
 };
 
 use crate::model::{self, AnyBackbone, SceneBushing, Shape};
-use crate::profile;
 use crate::scene::{BackboneSpec, Effect as EffectDesc, NumberType, Scene, Storage};
 
 /// How long to time.
@@ -317,7 +316,7 @@ fn firmware_maxwell<T: Real + 'static>(
 fn inputs<T: Real>(scene: &Scene, min_steps: usize, max_steps: usize) -> (Vec<T>, T) {
     let steps = (scene.steps() as usize).clamp(1, max_steps.max(1));
     let profile: Vec<T> = (1..=steps)
-        .map(|i| T::from_f64(profile::displacement(&scene.profile, i as f64 * scene.dt)))
+        .map(|i| T::from_f64(scene.input(i as f64 * scene.dt)))
         .collect();
     let inputs = profile
         .iter()
@@ -325,10 +324,7 @@ fn inputs<T: Real>(scene: &Scene, min_steps: usize, max_steps: usize) -> (Vec<T>
         .cycle()
         .take(steps.max(min_steps))
         .collect();
-    (
-        inputs,
-        T::from_f64(profile::displacement(&scene.profile, 0.0)),
-    )
+    (inputs, T::from_f64(scene.input(0.0)))
 }
 
 /// What is measured, in order: the scene, the backbone alone, each effect

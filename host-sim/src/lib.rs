@@ -9,6 +9,7 @@
 #![forbid(unsafe_code)]
 
 pub mod accuracy_cost;
+pub mod compare;
 pub mod cost;
 pub mod fit;
 pub mod fractional_report;

@@ -688,7 +688,8 @@ fn compiled<T: Real + 'static, E: Parts<T> + 'static>(
 /// two or more are an [`EffectList`]. The steps are bit-identical to
 /// [`build`]'s in every shape.
 pub fn compile<T: Real + 'static>(scene: &Scene) -> Result<Box<dyn SceneModel<T>>, ParamError> {
-    let x0 = T::from_f64(crate::profile::displacement(&scene.profile, 0.0));
+    // The profile as the model reads it (through the scene's ADC).
+    let x0 = T::from_f64(scene.input(0.0));
     let list = build::<T>(scene)?;
     if let Some(spec) = scene.oscillator {
         return OscillatorModel::boxed(list, scene.dt, spec, x0);

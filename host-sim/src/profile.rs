@@ -27,6 +27,7 @@ use std::fmt;
 use std::io::Read;
 use std::path::Path;
 
+use bushing::excitation::{Sweep, sin_cycles};
 use serde::Deserialize;
 use serde::de::{self, Visitor};
 
@@ -55,6 +56,15 @@ pub enum Spacing {
     Log,
     /// f(t) = f0 + (f1 - f0) t/T.
     Linear,
+}
+
+impl From<Spacing> for bushing::excitation::Spacing {
+    fn from(s: Spacing) -> Self {
+        match s {
+            Spacing::Log => Self::Log,
+            Spacing::Linear => Self::Linear,
+        }
+    }
 }
 
 /// One load change of a stop/start transient.
@@ -354,12 +364,6 @@ fn below_nyquist(name: &str, f: f64, dt: f64) -> Result<(), String> {
     }
 }
 
-/// sin(2π c) for a phase `c` in cycles, reduced to one cycle first so that
-/// whole cycles give exactly zero and long runs keep their precision.
-fn sin_cycles(c: f64) -> f64 {
-    (TAU * c.rem_euclid(1.0)).sin()
-}
-
 /// Displacement at time `t` (s).
 pub fn displacement(p: &ProfileSpec, t: f64) -> f64 {
     match *p {
@@ -368,7 +372,7 @@ pub fn displacement(p: &ProfileSpec, t: f64) -> f64 {
             frequency_hz,
             preload,
             ..
-        } => preload + amplitude * (std::f64::consts::TAU * frequency_hz * t).sin(),
+        } => preload + amplitude * libm::sin(TAU * frequency_hz * t),
         ProfileSpec::Triangle {
             amplitude,
             speed,
@@ -409,13 +413,9 @@ pub fn displacement(p: &ProfileSpec, t: f64) -> f64 {
             spacing,
             preload,
         } => {
-            let s = SweepLaw {
-                f0: f_start_hz,
-                f1: f_end_hz,
-                duration: duration_s,
-                spacing,
-            };
-            preload + amplitude * sin_cycles(s.cycles(t.clamp(0.0, duration_s)))
+            // NaN for a law that fails the checks: the model refuses it.
+            sweep_law(f_start_hz, f_end_hz, duration_s, spacing)
+                .map_or(f64::NAN, |s| preload + amplitude * s.unit(t))
         }
         ProfileSpec::StopStart {
             frequency_hz,
@@ -454,15 +454,11 @@ pub fn frequency_at(p: &ProfileSpec, t: f64) -> Option<f64> {
             duration_s,
             spacing,
             ..
-        } => (0.0..=duration_s).contains(&t).then(|| {
-            SweepLaw {
-                f0: f_start_hz,
-                f1: f_end_hz,
-                duration: duration_s,
-                spacing,
-            }
-            .frequency(t)
-        }),
+        } => (0.0..=duration_s)
+            .contains(&t)
+            .then(|| sweep_law(f_start_hz, f_end_hz, duration_s, spacing))
+            .flatten()
+            .map(|s| s.frequency(t)),
         ProfileSpec::Triangle { .. }
         | ProfileSpec::MultiStep { .. }
         | ProfileSpec::StopStart { .. }
@@ -662,38 +658,11 @@ impl Stepped<'_> {
     }
 }
 
-/// A sweep's frequency law.
-struct SweepLaw {
-    f0: f64,
-    f1: f64,
-    duration: f64,
-    spacing: Spacing,
-}
-
-impl SweepLaw {
-    /// Instantaneous frequency at `t` in Hz.
-    fn frequency(&self, t: f64) -> f64 {
-        let r = t / self.duration;
-        match self.spacing {
-            Spacing::Linear => self.f0 + (self.f1 - self.f0) * r,
-            Spacing::Log => self.f0 * ((self.f1 / self.f0).ln() * r).exp(),
-        }
-    }
-
-    /// Phase at `t` in cycles, the integral of the frequency from 0.
-    fn cycles(&self, t: f64) -> f64 {
-        match self.spacing {
-            Spacing::Linear => self.f0 * t + 0.5 * (self.f1 - self.f0) * t * t / self.duration,
-            Spacing::Log => {
-                let l = (self.f1 / self.f0).ln();
-                if l == 0.0 {
-                    self.f0 * t
-                } else {
-                    self.f0 * self.duration / l * (l * t / self.duration).exp_m1()
-                }
-            }
-        }
-    }
+/// The core's sweep law ([`bushing::excitation::Sweep`]) of a sweep
+/// profile, or `None` when its parameters fail the core's checks (a
+/// profile built by hand and never passed through [`steps`]).
+fn sweep_law(f0: f64, f1: f64, duration: f64, spacing: Spacing) -> Option<Sweep> {
+    Sweep::new(f0, f1, duration, spacing.into()).ok()
 }
 
 /// Unit response of the stop/start proxy, `tau` s after an event.
@@ -716,15 +685,17 @@ pub fn stop_start_response(tau: f64, frequency_hz: f64, damping: f64, rise_s: f6
         return 0.0;
     }
     let w = TAU * frequency_hz;
-    let root = (1.0 - damping * damping).sqrt();
+    let root = libm::sqrt(1.0 - damping * damping);
     let wd = w * root;
     let decay = damping * w;
     if rise_s <= 0.0 {
-        return 1.0 - (-decay * tau).exp() * ((wd * tau).cos() + damping / root * (wd * tau).sin());
+        return 1.0
+            - libm::exp(-decay * tau)
+                * (libm::cos(wd * tau) + damping / root * libm::sin(wd * tau));
     }
     let a = 2.0 * damping / w;
     let b = (2.0 * damping * damping - 1.0) / wd;
-    let g = |s: f64| (-decay * s).exp() * (a * (wd * s).cos() + b * (wd * s).sin());
+    let g = |s: f64| libm::exp(-decay * s) * (a * libm::cos(wd * s) + b * libm::sin(wd * s));
     if tau < rise_s {
         (tau - a + g(tau)) / rise_s
     } else {

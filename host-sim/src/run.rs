@@ -184,7 +184,7 @@ fn run_typed<T: Real + 'static>(
     let mut effect_energy = vec![0.0f64; names.len()];
     let x0 = match scene.oscillator {
         Some(o) => o.p0,
-        None => profile::displacement(&scene.profile, 0.0),
+        None => scene.input(0.0),
     };
     let (_, k0) = bushing::Backbone::eval(bushing.backbone(), T::from_f64(x0));
     let mut probe = ModulusProbe::new(scene.dt, k0.to_f64());
@@ -201,7 +201,8 @@ fn run_typed<T: Real + 'static>(
         inputs.clear();
         for k in 0..len as u64 {
             let t = (n + 1 + k) as f64 * scene.dt;
-            inputs.push(T::from_f64(profile::displacement(&scene.profile, t)));
+            // The profile as the model reads it (through the scene's ADC).
+            inputs.push(T::from_f64(scene.input(t)));
         }
         outputs.clear();
         parts.clear();
@@ -814,6 +815,40 @@ mod tests {
         one.push(0, 0.0, 1.0);
         one.push(0, 1.0, 2.0);
         assert_eq!(one.finish()[0], vec![(0.0, 1.0), (1.0, 2.0)]);
+    }
+
+    /// With an `[adc]`, the trace's x_mm is the code the ADC reads times
+    /// its step, exactly, in both number types (a power-of-two step and
+    /// 12-bit codes are exact in f32).
+    #[test]
+    fn an_adc_scene_traces_the_quantized_displacement() {
+        let text = |number: &str| {
+            format!(
+                "[run]\nrate_hz = 1000\nnumber = \"{number}\"\n\
+                 [backbone]\ntype = \"polynomial\"\ncoefficients = [0.0, 100.0]\nrange = [-2.0, 2.0]\n\
+                 [[effects]]\ntype = \"maxwell\"\nform = \"rate-exact-ramp\"\ncells = [{{ f_hz = 3.0, g = 0.2 }}]\n\
+                 [profile]\ntype = \"sweep\"\namplitude = 1.3\nf_start_hz = 2.0\nf_end_hz = 20.0\nduration_s = 0.5\npreload = 0.2\n\
+                 [adc]\nlsb_mm = 0.0009765625\nbits = 12\n"
+            )
+        };
+        let dir = std::env::temp_dir().join(format!("bushing-run-adc-{}", std::process::id()));
+        for number in ["f32", "f64"] {
+            let scene = Scene::parse("adc.toml", &text(number)).unwrap();
+            let adc = scene.adc.unwrap();
+            let summary = run(&scene, &dir).unwrap();
+            assert_eq!(summary.steps, 500);
+            let trace = fs::read_to_string(dir.join("trace.csv")).unwrap();
+            let mut rows = 0;
+            for (i, line) in trace.lines().skip(1).enumerate() {
+                let t = (i + 1) as f64 * scene.dt;
+                let x_mm: f64 = line.split(',').nth(1).unwrap().parse().unwrap();
+                let code = adc.code(profile::displacement(&scene.profile, t));
+                assert_eq!(x_mm, f64::from(code) * adc.lsb_mm, "{number} row {i}");
+                rows += 1;
+            }
+            assert_eq!(rows, 500);
+        }
+        fs::remove_dir_all(dir).ok();
     }
 
     /// A linear spring with a viscous term and an offset on a drifting

@@ -65,6 +65,52 @@ pub struct SceneFile {
     /// optional.
     #[serde(default)]
     pub oscillator: Option<Spanned<OscillatorSpec>>,
+    /// The rig's displacement ADC the model reads the profile through;
+    /// optional.
+    #[serde(default)]
+    pub adc: Option<Spanned<AdcSpec>>,
+}
+
+/// `[adc]`, as written: the displacement fed to the model is what an ideal
+/// ADC of step `lsb_mm` and `bits` bits reads
+/// ([`bushing::excitation::adc_code`]).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AdcSpec {
+    /// Step of one code, mm (finite, > 0).
+    pub lsb_mm: f64,
+    /// Width of the code, 2 to 24 bits (default 16).
+    #[serde(default = "default_adc_bits")]
+    pub bits: i64,
+}
+
+fn default_adc_bits() -> i64 {
+    16
+}
+
+/// Widest ADC a scene may declare.
+pub const MAX_ADC_BITS: u32 = 24;
+
+/// A validated `[adc]`: an ideal two's-complement ADC of step `lsb_mm`,
+/// rounding to nearest and saturating at its range.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Adc {
+    /// Step of one code, mm.
+    pub lsb_mm: f64,
+    /// Width of the code in bits, 2 to [`MAX_ADC_BITS`].
+    pub bits: u32,
+}
+
+impl Adc {
+    /// The code the ADC gives for `x` mm.
+    pub fn code(&self, x: f64) -> i32 {
+        bushing::excitation::adc_code(x, self.lsb_mm, self.bits)
+    }
+
+    /// The displacement it reads for `x` mm: `code(x) * lsb_mm`, in f64.
+    pub fn read(&self, x: f64) -> f64 {
+        f64::from(self.code(x)) * self.lsb_mm
+    }
 }
 
 /// `[oscillator]`: a unit modal mass on the bushing, `x'' + F(x) = f(t)`,
@@ -520,6 +566,9 @@ pub struct Scene {
     pub trace_every: u64,
     /// A unit mass on the bushing, driven by the profile as a force.
     pub oscillator: Option<OscillatorSpec>,
+    /// The ADC the model reads the imposed displacement through (never in
+    /// an oscillator scene).
+    pub adc: Option<Adc>,
 }
 
 /// How the cells of a Maxwell bank store their state (the core's
@@ -671,6 +720,12 @@ pub const MAX_STEPS: u64 = 2_000_000_000;
 impl Scene {
     /// Reads and checks a scene file.
     pub fn load(path: &Path) -> Result<Self, SceneError> {
+        Self::load_as(path, None)
+    }
+
+    /// Reads and checks a scene file, in number type `number` instead of
+    /// the scene's own when given (every check then runs in that type).
+    pub fn load_as(path: &Path, number: Option<NumberType>) -> Result<Self, SceneError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| SceneError {
             file: file.clone(),
@@ -678,7 +733,7 @@ impl Scene {
             message: format!("cannot read: {e}"),
         })?;
         let dir = path.parent().unwrap_or(Path::new(""));
-        Self::parse_in(&file, &text, dir)
+        Self::parse_as(&file, &text, dir, number)
     }
 
     /// Parses and checks scene text; `file` names it in errors. Files the
@@ -691,6 +746,17 @@ impl Scene {
     /// Parses and checks scene text whose relative file names are relative
     /// to `dir` (the scene file's directory when loaded from a file).
     pub fn parse_in(file: &str, text: &str, dir: &Path) -> Result<Self, SceneError> {
+        Self::parse_as(file, text, dir, None)
+    }
+
+    /// [`Scene::parse_in`], in number type `number` instead of the scene's
+    /// own `run.number` when given.
+    pub fn parse_as(
+        file: &str,
+        text: &str,
+        dir: &Path,
+        number: Option<NumberType>,
+    ) -> Result<Self, SceneError> {
         let err = |span: Option<Range<usize>>, message: String| SceneError {
             file: file.to_string(),
             at: span.map(|s| Location::of(text, s.start)),
@@ -702,7 +768,10 @@ impl Scene {
         })?;
 
         let run_span = raw.run.span();
-        let run = raw.run.into_inner();
+        let mut run = raw.run.into_inner();
+        if let Some(number) = number {
+            run.number = number;
+        }
         if !(run.rate_hz.is_finite() && run.rate_hz > 0.0 && run.rate_hz <= 1e9) {
             return Err(err(
                 Some(run_span),
@@ -794,6 +863,41 @@ impl Scene {
                 Some(o)
             }
         };
+        let adc = match raw.adc {
+            None => None,
+            Some(a) => {
+                let span = a.span();
+                let a = a.into_inner();
+                let bad = |m: String| err(Some(span.clone()), format!("adc.{m}"));
+                if oscillator.is_some() {
+                    return Err(err(
+                        Some(span),
+                        "adc: an [oscillator] scene's profile is a force, not a displacement \
+                         read by an ADC: remove [adc] or [oscillator]"
+                            .into(),
+                    ));
+                }
+                if !(a.lsb_mm.is_finite() && a.lsb_mm > 0.0) {
+                    return Err(bad(format!(
+                        "lsb_mm must be finite and > 0 mm, got {}",
+                        a.lsb_mm
+                    )));
+                }
+                let bits = u32::try_from(a.bits)
+                    .ok()
+                    .filter(|b| (2..=MAX_ADC_BITS).contains(b))
+                    .ok_or_else(|| {
+                        bad(format!(
+                            "bits must be a whole number from 2 to {MAX_ADC_BITS}, got {}",
+                            a.bits
+                        ))
+                    })?;
+                Some(Adc {
+                    lsb_mm: a.lsb_mm,
+                    bits,
+                })
+            }
+        };
         Ok(Self {
             title: raw.title,
             dt,
@@ -803,12 +907,24 @@ impl Scene {
             profile,
             trace_every,
             oscillator,
+            adc,
         })
     }
 
     /// Number of steps the profile takes.
     pub fn steps(&self) -> u64 {
         crate::profile::steps(&self.profile, self.dt).unwrap_or(0)
+    }
+
+    /// The input of the model at time `t` (s): the profile's displacement
+    /// in mm, as the `[adc]` reads it when there is one (`code * lsb_mm`,
+    /// in f64), or in an oscillator scene the applied force in N.
+    pub fn input(&self, t: f64) -> f64 {
+        let x = crate::profile::displacement(&self.profile, t);
+        match self.adc {
+            Some(adc) => adc.read(x),
+            None => x,
+        }
     }
 }
 
@@ -1625,6 +1741,103 @@ cycles = 3
             let e = Scene::parse("s.toml", text).unwrap_err();
             assert!(!e.message.is_empty(), "{text:?}");
         }
+    }
+
+    #[test]
+    fn an_adc_table_parses_with_its_default_width() {
+        let s = Scene::parse("s.toml", &format!("{GOOD}[adc]\nlsb_mm = 0.000244140625\n")).unwrap();
+        assert_eq!(
+            s.adc,
+            Some(Adc {
+                lsb_mm: 1.0 / 4096.0,
+                bits: 16
+            })
+        );
+        // The model reads code * lsb: 1 mm sine at 2 Hz, t = 0.125 s is
+        // its crest (1 mm = 4096 codes).
+        assert_eq!(s.input(0.125), 1.0);
+        let x = crate::profile::displacement(&s.profile, 0.01);
+        let code = bushing::excitation::adc_code(x, 1.0 / 4096.0, 16);
+        assert_eq!(s.input(0.01), f64::from(code) / 4096.0);
+        assert_ne!(s.input(0.01), x);
+        let s = Scene::parse("s.toml", &format!("{GOOD}[adc]\nlsb_mm = 0.5\nbits = 2\n")).unwrap();
+        assert_eq!(s.adc.map(|a| a.bits), Some(2));
+        // Two bits saturate at codes -2..=1: 0.5 mm at most.
+        assert_eq!(s.input(0.125), 0.5);
+        assert!(Scene::parse("s.toml", GOOD).unwrap().adc.is_none());
+    }
+
+    #[test]
+    fn bad_adc_values_are_refused_at_the_table() {
+        let adc =
+            |body: &str| Scene::parse("s.toml", &format!("{GOOD}[adc]\n{body}\n")).unwrap_err();
+        // [adc] is on line 19, after GOOD.
+        for (lsb, shown) in [
+            ("0.0", "0"),
+            ("-0.001", "-0.001"),
+            ("nan", "NaN"),
+            ("inf", "inf"),
+        ] {
+            let e = adc(&format!("lsb_mm = {lsb}"));
+            assert_eq!(
+                e.message,
+                format!("adc.lsb_mm must be finite and > 0 mm, got {shown}")
+            );
+            assert_eq!(at(&e), (19, 1), "{e}");
+        }
+        for bits in ["1", "25", "-3", "0"] {
+            let e = adc(&format!("lsb_mm = 0.001\nbits = {bits}"));
+            assert_eq!(
+                e.message,
+                format!("adc.bits must be a whole number from 2 to 24, got {bits}")
+            );
+            assert_eq!(at(&e), (19, 1), "{e}");
+        }
+        for bits in ["24", "2"] {
+            Scene::parse(
+                "s.toml",
+                &format!("{GOOD}[adc]\nlsb_mm = 0.001\nbits = {bits}\n"),
+            )
+            .unwrap();
+        }
+        let e = adc("lsb_mm = 0.001\nbits = 12.5");
+        assert!(
+            e.message
+                .starts_with("adc.bits: invalid type: floating point"),
+            "{e}"
+        );
+        assert_eq!(at(&e), (21, 8), "{e}");
+        let e = adc("lsb = 0.001");
+        assert!(e.message.contains("unknown field `lsb`"), "{e}");
+        assert!(e.at.is_some(), "{e}");
+        let e = adc("bits = 12");
+        assert!(e.message.contains("missing field `lsb_mm`"), "{e}");
+        assert!(e.at.is_some(), "{e}");
+        // Not with an oscillator, whose profile is a force.
+        let e = Scene::parse(
+            "s.toml",
+            &format!("{GOOD}[oscillator]\np0 = 0.0\n[adc]\nlsb_mm = 0.001\n"),
+        )
+        .unwrap_err();
+        assert!(
+            e.message
+                .starts_with("adc: an [oscillator] scene's profile is a force"),
+            "{e}"
+        );
+        assert_eq!(at(&e), (21, 1), "{e}");
+    }
+
+    #[test]
+    fn the_number_type_can_be_overridden() {
+        let s = Scene::parse_as("s.toml", GOOD, Path::new(""), Some(NumberType::F32)).unwrap();
+        assert_eq!(s.number, NumberType::F32);
+        let s = Scene::parse_as("s.toml", GOOD, Path::new(""), None).unwrap();
+        assert_eq!(s.number, NumberType::F64);
+        // The checks run in the overriding type.
+        let big = GOOD.replace("[0.0, 100.0]", "[0.0, 1e39]");
+        Scene::parse("s.toml", &big).unwrap();
+        let e = Scene::parse_as("s.toml", &big, Path::new(""), Some(NumberType::F32)).unwrap_err();
+        assert!(e.message.starts_with("backbone (f32)"), "{e}");
     }
 
     #[test]

@@ -30,7 +30,6 @@ use std::fmt;
 use bushing::{BoucWen, KfTable, MaxwellBank, MaxwellForm, MaxwellSpec, Real, Relaxation, Sts};
 
 use crate::model;
-use crate::profile;
 use crate::scene::{
     BackboneSpec, Effect, Friction, Law, NumberType, ProfileSpec, Scene, TABLE_POINTS,
 };
@@ -297,7 +296,7 @@ fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
     let (mut rows, mut outputs) = (Vec::with_capacity(1), Vec::with_capacity(n));
     for i in 1..=end {
         let t = i as f64 * scene.dt;
-        let x = profile::displacement(&scene.profile, t);
+        let x = scene.input(t);
         rows.clear();
         outputs.clear();
         bushing.step_into(&[T::from_f64(x)], &mut rows, &mut outputs);

@@ -1,0 +1,435 @@
+//! The rig loop under QEMU: one control period per SysTick interrupt at
+//! 5 kHz.
+//!
+//! Each period reads the displacement through the SPI ADC driver, steps
+//! the bushing (spline backbone, 4 Maxwell cells, 3 Jenkins cells), writes
+//! the force command through the SPI DAC driver and, on the Cortex-M4F,
+//! updates the modal tracker. The converters are simulated behind the same
+//! `SpiDevice` trait: the thread-mode loop computes the sweep of
+//! `scenes/rig-loop.toml` ahead into the ADC's queue and prints one line
+//! per period for the comparison with `bushing-sim`:
+//!
+//! ```text
+//! rig-loop number=f32 lsb_mm=0.000244140625 rate_hz=5000 part_hz=168000000
+//! step 1 41 4135d5f3
+//! ...
+//! ```
+//!
+//! The same source builds for the Cortex-M4F in `f32`
+//! (`--target thumbv7em-none-eabihf`, mps2-an386) and for the Cortex-M3 in
+//! the fixed-point `Q16` (`--target thumbv7m-none-eabi`, mps2-an385),
+//! where the `f32` tracker, in software floating point, does not fit the
+//! period and is left out. The SysTick period is the cycle budget of the
+//! reference part (168 MHz for the M4F, 72 MHz for the M3) counted as guest
+//! instructions: QEMU `-icount shift=0` runs one instruction per ns and
+//! SysTick counts one tick per 40. The run exits with success only when no
+//! period overran, the ADC queue never ran dry, every transfer succeeded,
+//! the tracker followed the sweep, and flash and static RAM are within
+//! 64 KiB and 16 KiB.
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(target_os = "none")]
+mod firmware {
+    use core::cell::RefCell;
+
+    use bushing::Faults;
+    use bushing_boards::memory;
+    use bushing_boards::rig::sim::{Plant, SimAdc, SimDac};
+    use bushing_boards::rig::{
+        Adc, AdcChannel, Dac, DacChannel, LSB_MM_TEXT, Monitor, RATE_HZ, Rig, RigState, Sample,
+    };
+    use cortex_m::interrupt::{self, Mutex};
+    use cortex_m::peripheral::syst::SystClkSource;
+    use cortex_m::peripheral::{SCB, SYST};
+    use cortex_m_rt::{entry, exception};
+    use cortex_m_semihosting::hprintln;
+    use heapless::Deque;
+    #[cfg(not(feature = "panic-never"))]
+    use panic_semihosting as _;
+
+    #[cfg(feature = "panic-never")]
+    use panic_never as _;
+
+    /// Working type: `f32` with an FPU, `Q16` without.
+    #[cfg(target_abi = "eabihf")]
+    type Num = f32;
+    #[cfg(not(target_abi = "eabihf"))]
+    type Num = bushing::Q16;
+
+    /// Whether the modal tracker runs in the period (FPU targets).
+    const TRACK: bool = cfg!(target_abi = "eabihf");
+    /// Clock of the reference part, Hz.
+    const PART_HZ: u32 = if TRACK { 168_000_000 } else { 72_000_000 };
+    /// Cycles of the reference part in one control period.
+    const BUDGET: u32 = PART_HZ / RATE_HZ as u32;
+    /// Guest instructions per SysTick tick under `-icount shift=0`.
+    const PER_TICK: u32 = bushing_boards::probe::INSTRUCTIONS_PER_TICK;
+    /// SysTick ticks per control period.
+    const PERIOD_TICKS: u32 = BUDGET / PER_TICK;
+    /// Flash and static RAM budgets of the M4F rig loop, bytes (reported,
+    /// not enforced, on the M3).
+    const FLASH_BUDGET: usize = 64 * 1024;
+    const RAM_BUDGET: usize = 16 * 1024;
+    /// Tracker frequency error allowed after the first 0.3 s, ppm.
+    const TRACKER_BOUND_PPM: u32 = 10_000;
+
+    /// One period, as logged by the thread-mode loop.
+    #[derive(Clone, Copy)]
+    struct Entry {
+        period: u32,
+        code: i16,
+        bits: u32,
+        /// Tracked frequency, Hz (0 without tracker).
+        frequency: f32,
+    }
+
+    /// Everything the interrupt owns.
+    struct Loop {
+        rig: Rig<Num>,
+        state: RigState<Num>,
+        monitor: Option<Monitor>,
+        adc: Adc<SimAdc>,
+        dac: Dac<SimDac>,
+        periods: u32,
+        last: u32,
+        errors: u32,
+        overruns: u32,
+        /// Ticks from the tick to the start of the handler (latency), and
+        /// from there to the DAC write and to the end of the tracker
+        /// update: worst and sum.
+        latency_worst: u32,
+        output_worst: u32,
+        output_sum: u64,
+        total_worst: u32,
+        total_sum: u64,
+        faults: Faults,
+        log: Deque<Entry, 32>,
+        dropped: u32,
+    }
+
+    static LOOP: Mutex<RefCell<Option<Loop>>> = Mutex::new(RefCell::new(None));
+
+    /// Ticks since the current period began. The interrupt is raised as
+    /// the counter reaches 0, which it shows for one tick before it
+    /// reloads with `PERIOD_TICKS - 1`.
+    fn elapsed() -> u32 {
+        PERIOD_TICKS.wrapping_sub(SYST::get_current()) % PERIOD_TICKS
+    }
+
+    impl Loop {
+        /// One control period.
+        fn tick(&mut self) {
+            if self.periods >= self.last {
+                return;
+            }
+            let start = elapsed();
+            let result = self
+                .rig
+                .period(&mut self.state, &mut self.adc, &mut self.dac);
+            let output = elapsed().wrapping_sub(start);
+            let mut frequency = 0.0;
+            let entry = match result {
+                Ok(p) => {
+                    if let Some(m) = self.monitor.as_mut() {
+                        m.push(f32::from_code(p.code));
+                        frequency = m.mode().frequency;
+                    }
+                    self.faults = p.faults;
+                    Some((p.code, p.force.log_bits()))
+                }
+                Err(_) => {
+                    self.errors += 1;
+                    None
+                }
+            };
+            #[cfg(feature = "deliberate-panic")]
+            {
+                const TABLE: [u32; 4] = [1, 2, 3, 4];
+                let i = core::hint::black_box(self.periods as usize);
+                core::hint::black_box(TABLE[i]);
+            }
+            let total = elapsed().wrapping_sub(start);
+            self.latency_worst = self.latency_worst.max(start);
+            self.periods += 1;
+            self.output_worst = self.output_worst.max(output);
+            self.output_sum += u64::from(output);
+            self.total_worst = self.total_worst.max(total);
+            self.total_sum += u64::from(total);
+            if let Some((code, bits)) = entry {
+                let e = Entry {
+                    period: self.periods,
+                    code,
+                    bits,
+                    frequency,
+                };
+                if self.log.push_back(e).is_err() {
+                    self.dropped += 1;
+                }
+            }
+            // The next tick is already pending: this period overran.
+            if SCB::is_pendst_pending() {
+                self.overruns += 1;
+            }
+        }
+    }
+
+    #[exception]
+    fn SysTick() {
+        interrupt::free(|cs| {
+            if let Ok(mut l) = LOOP.borrow(cs).try_borrow_mut()
+                && let Some(l) = l.as_mut()
+            {
+                l.tick();
+            }
+        });
+    }
+
+    fn build(plant: &Plant) -> Result<Loop, bushing::ParamError> {
+        let rig = Rig::<Num>::new()?;
+        let state = rig.start(plant.code(0));
+        let monitor = if TRACK { Some(Monitor::new()?) } else { None };
+        Ok(Loop {
+            rig,
+            state,
+            monitor,
+            adc: Adc::new(SimAdc::default(), AdcChannel::In0),
+            dac: Dac::new(SimDac::default(), DacChannel::A),
+            periods: 0,
+            last: plant.steps(),
+            errors: 0,
+            overruns: 0,
+            latency_worst: 0,
+            output_worst: 0,
+            output_sum: 0,
+            total_worst: 0,
+            total_sum: 0,
+            faults: Faults::default(),
+            log: Deque::new(),
+            dropped: 0,
+        })
+    }
+
+    /// What thread mode takes from the interrupt in one pass.
+    struct Drained {
+        entries: Deque<Entry, 32>,
+        /// The offered code went into the ADC queue.
+        fed: bool,
+        done: bool,
+    }
+
+    /// Builds the loop into [`LOOP`] with the ADC queue filled; returns
+    /// the next period whose code is to be queued.
+    #[inline(never)]
+    fn setup(plant: &Plant) -> Result<u32, &'static str> {
+        let mut lp = build(plant).map_err(|_| "rig parameters refused")?;
+        let mut next = 1u32;
+        while next <= plant.steps() && lp.adc.device_mut().feed(plant.code(next)) {
+            next += 1;
+        }
+        interrupt::free(|cs| {
+            let mut slot = LOOP
+                .borrow(cs)
+                .try_borrow_mut()
+                .map_err(|_| "loop state busy")?;
+            *slot = Some(lp);
+            Ok(next)
+        })
+    }
+
+    /// Offers `code` to the ADC queue and takes the log, in one critical
+    /// section.
+    #[inline(never)]
+    fn exchange(code: Option<i16>) -> Drained {
+        interrupt::free(|cs| {
+            let mut out = Drained {
+                entries: Deque::new(),
+                fed: false,
+                done: true,
+            };
+            if let Ok(mut l) = LOOP.borrow(cs).try_borrow_mut()
+                && let Some(l) = l.as_mut()
+            {
+                out.fed = code.is_some_and(|c| l.adc.device_mut().feed(c));
+                out.entries = core::mem::take(&mut l.log);
+                out.done = l.periods >= l.last;
+            }
+            out
+        })
+    }
+
+    #[entry]
+    fn main() -> ! {
+        memory::paint_stack();
+        let Some(mut core) = cortex_m::Peripherals::take() else {
+            bushing_boards::probe::fail("core peripherals already taken")
+        };
+        let Ok(plant) = Plant::new() else {
+            bushing_boards::probe::fail("sweep refused")
+        };
+        let mut next = match setup(&plant) {
+            Ok(n) => n,
+            Err(why) => bushing_boards::probe::fail(why),
+        };
+        // Stack of the set-up, then of the running loop alone.
+        let setup_stack = memory::stack_high_water();
+        memory::paint_stack();
+
+        hprintln!(
+            "rig-loop number={} lsb_mm={} rate_hz={} part_hz={} budget={}",
+            if TRACK { "f32" } else { "q16" },
+            LSB_MM_TEXT,
+            RATE_HZ as u32,
+            PART_HZ,
+            BUDGET
+        );
+        let syst = &mut core.SYST;
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(PERIOD_TICKS - 1);
+        syst.clear_current();
+        syst.enable_interrupt();
+        syst.enable_counter();
+
+        let mut worst_tracking = 0.0f32;
+        loop {
+            // The next code, computed outside the critical section.
+            let code = (next <= plant.steps()).then(|| plant.code(next));
+            let drained = exchange(code);
+            if drained.fed {
+                next += 1;
+            }
+            for e in &drained.entries {
+                hprintln!("step {} {} {:08x}", e.period, e.code, e.bits);
+                if TRACK && f64::from(e.period) / RATE_HZ > 0.3 {
+                    let f = plant.frequency(e.period) as f32;
+                    worst_tracking = worst_tracking.max((e.frequency - f).abs() / f);
+                }
+            }
+            if drained.done && drained.entries.is_empty() {
+                break;
+            }
+            // Sleep until the next period when the queue is full.
+            if !drained.fed {
+                cortex_m::asm::wfi();
+            }
+        }
+        core.SYST.disable_interrupt();
+        core.SYST.disable_counter();
+        let loop_stack = memory::stack_high_water();
+        let summary = interrupt::free(|cs| {
+            LOOP.borrow(cs)
+                .try_borrow()
+                .ok()
+                .and_then(|l| l.as_ref().map(Loop::summary))
+        });
+        match summary {
+            Some(s) => report(&s, worst_tracking, setup_stack, loop_stack),
+            None => bushing_boards::probe::fail("loop state lost"),
+        }
+    }
+
+    /// The figures of a finished run.
+    #[derive(Clone, Copy)]
+    struct Summary {
+        periods: u32,
+        last: u32,
+        overruns: u32,
+        errors: u32,
+        dropped: u32,
+        underruns: u32,
+        conversions: u32,
+        faults: Faults,
+        latency_worst: u32,
+        output_worst: u32,
+        output_sum: u64,
+        total_worst: u32,
+        total_sum: u64,
+    }
+
+    impl Loop {
+        fn summary(&self) -> Summary {
+            Summary {
+                periods: self.periods,
+                last: self.last,
+                overruns: self.overruns,
+                errors: self.errors,
+                dropped: self.dropped,
+                underruns: self.adc.device().underruns(),
+                conversions: self.adc.device().conversions(),
+                faults: self.faults,
+                latency_worst: self.latency_worst,
+                output_worst: self.output_worst,
+                output_sum: self.output_sum,
+                total_worst: self.total_worst,
+                total_sum: self.total_sum,
+            }
+        }
+    }
+
+    fn report(l: &Summary, worst_tracking: f32, setup_stack: usize, stack: usize) -> ! {
+        let n = u64::from(l.periods.max(1));
+        // `as` saturates: a NaN or huge error reads as 0 or u32::MAX.
+        let tracking_ppm = if worst_tracking.is_nan() {
+            u32::MAX
+        } else {
+            (worst_tracking * 1e6) as u32
+        };
+        let flash = memory::flash_bytes();
+        let ram = memory::static_ram_bytes();
+        let (underruns, conversions) = (l.underruns, l.conversions);
+        hprintln!(
+            "periods {} overruns {} adc_underruns {} conversions {} transfer_errors {} dropped_log {} faults {:#x}",
+            l.periods,
+            l.overruns,
+            underruns,
+            conversions,
+            l.errors,
+            l.dropped,
+            l.faults.bits()
+        );
+        hprintln!(
+            "instructions latency_worst {} to_dac_mean {} to_dac_worst {} period_mean {} period_worst {} budget {} (±{} per figure)",
+            l.latency_worst * PER_TICK,
+            l.output_sum * u64::from(PER_TICK) / n,
+            l.output_worst * PER_TICK,
+            l.total_sum * u64::from(PER_TICK) / n,
+            l.total_worst * PER_TICK,
+            BUDGET,
+            PER_TICK
+        );
+        hprintln!(
+            "memory flash {} static_ram {} stack_loop {} stack_setup {} flash_budget {} ram_budget {}",
+            flash,
+            ram,
+            stack,
+            setup_stack,
+            FLASH_BUDGET,
+            RAM_BUDGET
+        );
+        if TRACK {
+            hprintln!(
+                "tracker worst_frequency_error_ppm {} bound_ppm {}",
+                tracking_ppm,
+                TRACKER_BOUND_PPM
+            );
+        }
+        let ok = l.periods == l.last
+            && l.overruns == 0
+            && underruns == 0
+            && l.errors == 0
+            && l.dropped == 0
+            && l.faults.is_empty()
+            && (!TRACK || (flash <= FLASH_BUDGET && ram <= RAM_BUDGET))
+            && (!TRACK || tracking_ppm <= TRACKER_BOUND_PPM);
+        if ok {
+            hprintln!("verdict pass");
+            bushing_boards::probe::pass()
+        } else {
+            bushing_boards::probe::fail("verdict fail")
+        }
+    }
+}
+
+#[cfg(not(target_os = "none"))]
+fn main() {
+    eprintln!("rig-loop is firmware: build it for a Cortex-M target (see docs/firmware.md)");
+}
