@@ -8,9 +8,10 @@
 #   2. bushing-sim runs the same scene in f32 and in f64;
 #   3. the M4F force trace must equal the f32 host trace bit for bit, and the
 #      M3 trace must stay within one DAC step (0.125 N) of the f64 trace;
-#   4. the panic-never link check: the M4F release image links with
-#      `panic-never` (no panicking branch left), and fails to link when a
-#      bounds-checked index is added on purpose (feature deliberate-panic).
+#   4. the panic-never link check: both release images link with
+#      `panic-never` (no panicking branch left), and the M4F image fails to
+#      link when a bounds-checked index is added on purpose (feature
+#      deliberate-panic).
 # Logs and traces go to target/rig-loop/. Needs the Cortex-M targets and
 # qemu-system-arm (scripts/test.sh installs them).
 set -euo pipefail
@@ -41,10 +42,12 @@ step "M4F force trace against bushing-sim f32: bit for bit"
 step "M3 (Q16) force trace against bushing-sim f64: within one DAC step"
 ./target/release/bushing-sim compare-trace "$out/host-f64/trace.csv" "$out/m3.log" --within 0.125
 
-step "panic-never link check of the M4F release image"
-cargo build -q --release -p bushing-boards --target thumbv7em-none-eabihf --bin rig-loop \
-    --features panic-never
-echo "links with panic-never: no panicking branch"
+step "panic-never link check of the release images (M4F f32, M3 Q16)"
+for target in thumbv7em-none-eabihf thumbv7m-none-eabi; do
+    cargo build -q --release -p bushing-boards --target "$target" --bin rig-loop \
+        --features panic-never
+    echo "$target: links with panic-never, no panicking branch"
+done
 if cargo build -q --release -p bushing-boards --target thumbv7em-none-eabihf --bin rig-loop \
     --features panic-never,deliberate-panic 2>"$out/deliberate-panic.txt"; then
     echo "error: the image with a deliberate panic path linked" >&2

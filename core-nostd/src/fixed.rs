@@ -251,11 +251,20 @@ macro_rules! fixed_real {
 
             #[inline(always)]
             fn from_float(v: $float) -> Self {
-                if v.is_nan() {
-                    Self::from_bits(0)
-                } else {
-                    Self(<$fx>::saturating_from_num(v))
-                }
+                Self::from_f64_rounded(v as f64)
+            }
+
+            /// `v` rounded to the nearest value (ties to even) and
+            /// saturated, NaN giving 0: what `fixed`'s
+            /// `saturating_from_num` gives, without the panicking branch it
+            /// keeps for NaN (on a core without an FPU, LLVM cannot see
+            /// that a soft-float NaN test has already excluded it).
+            #[inline(always)]
+            fn from_f64_rounded(v: f64) -> Self {
+                // Scaling by a power of two is exact; `as` saturates and
+                // maps NaN to 0.
+                let scaled = libm::rint(v * (1u64 << $frac) as f64);
+                Self::from_bits(scaled as $bits)
             }
 
             #[inline(always)]
@@ -364,11 +373,7 @@ macro_rules! fixed_real {
 
             #[inline(always)]
             fn from_f64(v: f64) -> Self {
-                if v.is_nan() {
-                    Self::ZERO
-                } else {
-                    Self(<$fx>::saturating_from_num(v))
-                }
+                Self::from_f64_rounded(v)
             }
             #[inline(always)]
             fn to_f64(self) -> f64 {
@@ -500,6 +505,49 @@ fixed_real!(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn conversions_round_as_the_fixed_crate_does() {
+        let mut values = alloc::vec![
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            1e-9,
+            -1e-9,
+            3.0e4,
+            -3.3e4,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MIN_POSITIVE,
+            2.5e9,
+            -2.5e9,
+        ];
+        // Ties in both types, and values either side of them.
+        for k in -40i32..40 {
+            for frac in [16, 32] {
+                let tie = (f64::from(k) + 0.5) / (1u64 << frac) as f64;
+                values.extend([tie, tie * (1.0 + 1e-15), tie * (1.0 - 1e-15)]);
+            }
+        }
+        let mut x = 0.1234f64;
+        for _ in 0..2000 {
+            x = (x * 7919.0 + 0.377).fract();
+            values.push((x - 0.5) * 7.0e4);
+            values.push((x - 0.5) * 1.0e-3);
+        }
+        for &v in &values {
+            assert_eq!(Q16::from_f64(v).0, I16F16::saturating_from_num(v), "{v}");
+            assert_eq!(Q32::from_f64(v).0, I32F32::saturating_from_num(v), "{v}");
+            let f = v as f32;
+            assert_eq!(Q16::from_float(f).0, I16F16::saturating_from_num(f), "{f}");
+        }
+        assert_eq!(Q16::from_f64(f64::NAN), Q16::ZERO);
+        assert_eq!(Q32::from_f64(f64::NAN), Q32::ZERO);
+    }
+
     use super::*;
     use crate::backbone::{Backbone, MonotoneSpline, Polynomial};
     use crate::bushing::Bushing;

@@ -145,4 +145,11 @@ Beside the named cases:
   that rounds to zero, a cell's ω·dt or energy coefficient that overflows, a reciprocal
   that overflows); they are now refused at construction (`OutOfRange`, `NotFinite`) or,
   for the tangent, at the step (`Faults::OUT_OF_RANGE`), each with a unit test.
+- The rig-loop firmware (`docs/firmware.md`, `./scripts/rig-loop.sh`, in CI): both
+  release images, M4F in f32 and M3 in Q16, link with `panic-never` as their panic
+  handler, so no panicking branch is left; adding a bounds-checked index to the
+  interrupt (`--features panic-never,deliberate-panic`) makes the link fail with
+  `error(panic-never): your program contains at least one panicking branch`. The same
+  firmware measures its stack high-water mark by painting the free RAM in QEMU and
+  reports it with its flash, static RAM and per-period instructions.
 ";

@@ -96,6 +96,11 @@ impl SimAdc {
     pub fn conversions(&self) -> u32 {
         self.conversions
     }
+
+    /// Codes queued: how many periods ahead of the loop the feeder is.
+    pub fn queued(&self) -> usize {
+        self.queue.len()
+    }
 }
 
 impl ErrorType for SimAdc {
