@@ -25,7 +25,7 @@
 //! | [`Real::from_f64`] | rounded to nearest (ties to even), saturated; NaN gives 0 |
 //! | [`Real::is_finite`] | always true: there is no NaN or infinity |
 //! | [`Real::bits`] | the raw two's-complement bits, zero-extended (as `f32::to_bits`) |
-//! | [`Real::exp`], [`Real::exp_m1`], [`Real::powf`], [`Real::sqrt`] | through libm in `f32` ([`Q16`]) or `f64` ([`Q32`]) and back, saturated; NaN (`sqrt` of a negative) gives 0. Soft-float on a Cortex-M3: construction and re-tune only, never in the step of a supported model |
+//! | [`Real::exp`], [`Real::exp_m1`], [`Real::powf`], [`Real::sqrt`], [`Real::atan2`] | through libm in `f32` ([`Q16`]) or `f64` ([`Q32`]) and back, saturated; NaN (`sqrt` of a negative) gives 0. Soft-float on a Cortex-M3: construction and re-tune only, never in the step of a supported model |
 //!
 //! The multiplication rounds to nearest rather than truncating (as `fixed`
 //! does): a truncated product is biased by half a unit, and a relaxation
@@ -183,7 +183,7 @@ macro_rules! fixed_real {
     (
         $(#[$doc:meta])*
         $name:ident, $fx:ty, $bits:ty, $wide:ty, $frac:expr,
-        $float:ty, $exp:path, $expm1:path, $pow:path, $sqrt:path
+        $float:ty, $exp:path, $expm1:path, $pow:path, $sqrt:path, $atan2:path
     ) => {
         $(#[$doc])*
         #[derive(Clone, Copy, Default, PartialEq, Eq, PartialOrd, Hash)]
@@ -415,6 +415,10 @@ macro_rules! fixed_real {
             fn sqrt(self) -> Self {
                 Self::from_float($sqrt(self.to_float()))
             }
+            #[inline(always)]
+            fn atan2(self, other: Self) -> Self {
+                Self::from_float($atan2(self.to_float(), other.to_float()))
+            }
         }
     };
 }
@@ -478,7 +482,7 @@ fixed_real!(
     /// # Ok::<(), bushing::ParamError>(())
     /// ```
     Q16, I16F16, i32, i64, 16,
-    f32, libm::expf, libm::expm1f, libm::powf, libm::sqrtf
+    f32, libm::expf, libm::expm1f, libm::powf, libm::sqrtf, libm::atan2f
 );
 
 fixed_real!(
@@ -500,7 +504,7 @@ fixed_real!(
     ///   instructions (force only), still half of soft-float f32, but
     ///   6 756 with the energy's two 128-bit divisions.
     Q32, I32F32, i64, i128, 32,
-    f64, libm::exp, libm::expm1, libm::pow, libm::sqrt
+    f64, libm::exp, libm::expm1, libm::pow, libm::sqrt, libm::atan2
 );
 
 #[cfg(test)]

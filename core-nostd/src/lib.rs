@@ -84,6 +84,7 @@ pub mod iwan;
 pub mod maxwell;
 pub mod oscillator;
 pub mod real;
+pub mod six_dof;
 pub mod stack;
 pub mod temperature;
 pub mod tracker;

@@ -68,10 +68,14 @@ pub trait Real:
     /// Square root through libm (`sqrtf`: about 77 guest instructions on a
     /// Cortex-M4F, which has no `vsqrt` path in libm).
     fn sqrt(self) -> Self;
+    /// The angle of the point (x, y) = (`other`, `self`) in (-π, π],
+    /// through libm (`atan2f` works in single precision). Only the 6-DOF
+    /// bushing calls it per step, once, for the relative rotation angle.
+    fn atan2(self, other: Self) -> Self;
 }
 
 macro_rules! impl_real {
-    ($t:ty, $guard:expr, $bits:expr, $exp:path, $expm1:path, $pow:path, $sqrt:path) => {
+    ($t:ty, $guard:expr, $bits:expr, $exp:path, $expm1:path, $pow:path, $sqrt:path, $atan2:path) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -125,6 +129,10 @@ macro_rules! impl_real {
             fn sqrt(self) -> Self {
                 $sqrt(self)
             }
+            #[inline(always)]
+            fn atan2(self, other: Self) -> Self {
+                $atan2(self, other)
+            }
         }
     };
 }
@@ -136,7 +144,8 @@ impl_real!(
     libm::expf,
     libm::expm1f,
     libm::powf,
-    libm::sqrtf
+    libm::sqrtf,
+    libm::atan2f
 );
 impl_real!(
     f64,
@@ -145,7 +154,8 @@ impl_real!(
     libm::exp,
     libm::expm1,
     libm::pow,
-    libm::sqrt
+    libm::sqrt,
+    libm::atan2
 );
 
 /// Where a run-time re-tune forms its exponentials in the working type

@@ -24,6 +24,7 @@ mod firmware {
     use core::hint::black_box;
     use core::mem::size_of_val;
 
+    use bushing::six_dof::{Connectivity, Loads, Pose, SixDofState};
     use bushing::tracker::{
         Channel, Modulus, ModulusSpec, ModulusState, ModulusTracker, Refused, SineSpec, SineState,
         SineTracker,
@@ -42,8 +43,9 @@ mod firmware {
     };
     use bushing_boards::probe::{self, INSTRUCTIONS_PER_TICK, ticks};
     use bushing_boards::{
-        DT, IwanOscillator, berg, bouc_wen, composite, dahl, default_bushing, drives, grunwald,
-        iwan_bank, iwan_oscillator, jenkins, maxwell_bank, polynomial, sine, spline, sts16, xf2,
+        DT, IwanOscillator, MountEffects, berg, bouc_wen, composite, dahl, default_bushing, drives,
+        engine_mount, grunwald, iwan_bank, iwan_oscillator, jenkins, maxwell_bank, mount_motion,
+        polynomial, sine, spline, sts16, xf2,
     };
     use cortex_m_rt::entry;
     use cortex_m_semihosting::hprintln;
@@ -335,6 +337,67 @@ mod firmware {
             &xs,
             xs_baseline,
         );
+    }
+
+    type Mount = bushing_boards::Mount<f32>;
+    type MountState = SixDofState<f32, <MountEffects<f32> as Effect<f32>>::State>;
+
+    /// One 6-DOF step, returning the node loads.
+    #[inline(never)]
+    fn six_dof_step(b: &Mount, s: &mut MountState, nodes: &[Pose<f32>; 2]) -> Loads<f32> {
+        b.step(s, &nodes[0], &nodes[1]).loads
+    }
+
+    /// The stand-in for [`six_dof_step`].
+    #[inline(never)]
+    fn six_dof_empty(_: &Mount, _: &mut MountState, nodes: &[Pose<f32>; 2]) -> Loads<f32> {
+        let p = [nodes[0].position, nodes[1].position];
+        Loads {
+            force: p,
+            moment: p,
+        }
+    }
+
+    /// One 6-DOF engine mount (six 1D laws of 2 Maxwell and 3 Jenkins
+    /// cells) in each connectivity, over its motion.
+    fn six_dof() {
+        const N: usize = 100;
+        let motion = mount_motion::<f32, N>();
+        for (connectivity, name) in [
+            (Connectivity::Attached, "mount/attached"),
+            (Connectivity::Invariant, "mount/invariant"),
+        ] {
+            let Ok(b) = engine_mount::<f32>(connectivity) else {
+                fail()
+            };
+            let run = |kernel: fn(&Mount, &mut MountState, &[Pose<f32>; 2]) -> Loads<f32>| {
+                let [n1, n2] = &motion[0];
+                let mut s = b.state_at(n1, n2);
+                ticks(|| {
+                    for nodes in &motion {
+                        black_box(kernel(&b, &mut s, black_box(nodes)));
+                    }
+                })
+            };
+            let t = run(six_dof_step);
+            let empty = run(six_dof_empty);
+            let baseline = ticks(|| {
+                for nodes in &motion {
+                    black_box(black_box(nodes));
+                }
+            });
+            let [n1, n2] = &motion[0];
+            let line = Line {
+                number: "f32",
+                family: "six-dof",
+                name,
+                n: 6,
+                state_bytes: size_of_val(&b.state_at(n1, n2)),
+                params_bytes: size_of_val(&b),
+                function: six_dof_step as *const () as usize,
+            };
+            report(&line, t, empty, baseline, N);
+        }
     }
 
     fn grunwald_cost<const N: usize>(xs: &[f32], baseline: u32) {
@@ -805,6 +868,7 @@ mod firmware {
             xs_baseline,
         );
         oscillator();
+        six_dof();
         sine_trackers();
 
         // The modal tracker: one mode on one accelerometer (4 states), then

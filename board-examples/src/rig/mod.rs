@@ -254,24 +254,19 @@ pub const TRACKER_NOISE_MM: f64 = 1e-3;
 /// drifts raises `amplitude_walk`: at 0.1/√s (with a damping walk of
 /// 0.01/√s) the worst frequency error on this sweep grows from 0.62 % to
 /// 1.6 %.
-pub const TRACKER_TUNING: Tuning = Tuning {
-    frequency_walk: 5.0,
-    damping_walk: 0.0,
-    amplitude_walk: 0.0,
-    initial_frequency_error: 0.01,
-    initial_damping_error: 0.01,
-    initial_amplitude_error: 0.1,
-    gate: 6.0,
-    outlier_run: 8,
-    fade_snr: 3.0,
-    max_damping: 0.5,
-    max_frequency: 0.9,
-};
+pub fn tracker_tuning() -> Tuning {
+    Tuning {
+        frequency_walk: 5.0,
+        damping_walk: 0.0,
+        amplitude_walk: 0.0,
+        ..Tuning::default()
+    }
+}
 
 impl Monitor {
     /// The rig's tracker, fed every `decimation`-th control period.
     pub fn new(decimation: u32) -> Result<Self, ParamError> {
-        Self::tuned(decimation, TRACKER_NOISE_MM, TRACKER_TUNING)
+        Self::tuned(decimation, TRACKER_NOISE_MM, tracker_tuning())
     }
 
     /// A tracker fed every `decimation`-th period, assuming a displacement

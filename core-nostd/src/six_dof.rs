@@ -1,0 +1,415 @@
+//! Six-DOF bushings: six 1D laws between two rigid nodes, with the
+//! "attached" or the "invariant" (mid-rotation) connectivity of Merel,
+//! Wander, Masarati and Morandini (Multibody Dynamics 2007, "seed 002").
+//!
+//! A bushing joins node 1 and node 2, each given by its [`Pose`]: a
+//! position and a unit quaternion that turns node-frame vectors into
+//! global ones. It is attached at a point fixed in each node frame (the
+//! offsets f̄₁, f̄₂), so with d_i = R_i f̄_i and p_i = x_i + d_i the
+//! bushing's elongation is d = p₂ - p₁. The relative rotation is
+//! R = R₁ᵀR₂ and its rotation vector θ = ax(log R) (seed 002, "relative
+//! orientation vector"), whose components are the same in the frames of
+//! node 1, node 2 and the mid frame below (Rθ = θ).
+//!
+//! Each of the six directions has its own 1D law from the catalogue (a
+//! [`Bushing`]: backbone plus effects, one per axis, so the bushing may be
+//! anisotropic): translations x, y, z take the components of d in the
+//! bushing frame and give the force F̄; rotations x, y, z take the
+//! components of θ and give the moment M̄. F = R_b F̄ and M = R_b M̄ are the
+//! loads in the global frame. Node 1 receives (F, M₁) and node 2 (-F, M₂),
+//! the moments including the arms of the attachment points.
+//!
+//! - **Attached** (seed 002, "attached" angular spring): the bushing frame
+//!   is node 1's, R_b = R₁, and the force acts at p₂, so node 1 carries
+//!   the whole arm: M₁ = (p₂ - x₁) × F + M, M₂ = -d₂ × F - M. The law is
+//!   referred to node 1: with anisotropic laws, swapping the nodes changes
+//!   the loads (the seed's car suspension oscillated unstably until the
+//!   node order was reversed).
+//! - **Invariant** (seed 002, "invariant" mid-rotation): the bushing frame
+//!   is the mid frame R̂ = R₁R̃ = R₂R̃ᵀ with R̃ = exp(½θ×), which does not
+//!   change when the nodes are swapped. The moment of F about the mid point
+//!   is shared with Ĩ = R̂(I + R̃)⁻¹R̂ᵀ = ½(I - (R₁t)×), t = tan(|θ|/4) θ/|θ|
+//!   (Ĩ + Ĩᵀ = I, half each at θ = 0): M₁ = d₁ × F + Ĩ(d × F) + M,
+//!   M₂ = -d₂ × F + Ĩᵀ(d × F) - M. Swapping the nodes gives the same loads
+//!   on each physical node, for laws that are odd in their input (a linear
+//!   or symmetric law: every law of the catalogue with an odd backbone);
+//!   `tests` checks this to 1e-12 in f64.
+//!
+//! Both forms balance exactly: ΣF = 0 and Σ(x_i × F_i + M_i) = 0.
+//!
+//! The seed gives the formulas for the angular spring only; the mapping of
+//! the translational part and the moment arms follow the same mid-frame
+//! construction (the force is the law's in the mid frame, its moment about
+//! the mid point split by Ĩ).
+//!
+//! **States**: the six axes' [`BushingState`]s.
+//!
+//! **Stability**: that of each axis law; the kinematics adds none. The
+//! rotation vector is the principal one, |θ| ≤ π: at a relative rotation of
+//! half a turn the mid frame jumps by a half turn (a bushing never gets
+//! there).
+//!
+//! **Tangent**: each axis's algorithmic tangent dF̄_k/dx_k, in the bushing
+//! frame ([`SixDofOutput::tangent`], with [`SixDofOutput::frame`]): the
+//! material part R_b diag(k) R_bᵀ of the stiffness of an implicit solver.
+//! The geometric part (the variation of R_b and of the arms) is not formed.
+//!
+//! **Cost**: six 1D steps plus the kinematics: three quaternion products,
+//! about ten vector rotations and cross products, one square root, one
+//! `atan2` and two divisions (guarded: |v| > 0, 1 + w ≥ 1).
+
+use crate::backbone::Backbone;
+use crate::bushing::{Bushing, BushingState, Effect};
+use crate::error::{Param, ParamError, finite};
+use crate::real::Real;
+
+/// A vector of three components.
+pub type Vec3<T> = [T; 3];
+
+/// A unit quaternion w + v (Hamilton's convention): the active rotation
+/// that turns vectors of a node frame into the global frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Quat<T> {
+    /// Scalar part, cos(φ/2).
+    pub w: T,
+    /// Vector part, sin(φ/2) times the axis.
+    pub v: Vec3<T>,
+}
+
+fn add<T: Real>(a: Vec3<T>, b: Vec3<T>) -> Vec3<T> {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn sub<T: Real>(a: Vec3<T>, b: Vec3<T>) -> Vec3<T> {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn scale<T: Real>(a: Vec3<T>, k: T) -> Vec3<T> {
+    [a[0] * k, a[1] * k, a[2] * k]
+}
+
+fn neg<T: Real>(a: Vec3<T>) -> Vec3<T> {
+    [-a[0], -a[1], -a[2]]
+}
+
+fn dot<T: Real>(a: Vec3<T>, b: Vec3<T>) -> T {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross<T: Real>(a: Vec3<T>, b: Vec3<T>) -> Vec3<T> {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+impl<T: Real> Quat<T> {
+    /// No rotation.
+    pub fn identity() -> Self {
+        Self {
+            w: T::ONE,
+            v: [T::ZERO; 3],
+        }
+    }
+
+    /// The rotation of angle |r| about r/|r| (a rotation vector, rad),
+    /// computed in f64 (construction, scenes and tests).
+    pub fn from_rotation_vector(r: [f64; 3]) -> Self {
+        let angle = libm::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+        // sin(φ/2)/φ, 1/2 at φ = 0.
+        let k = if angle > 0.0 {
+            libm::sin(0.5 * angle) / angle
+        } else {
+            0.5
+        };
+        Self {
+            w: T::from_f64(libm::cos(0.5 * angle)),
+            v: [
+                T::from_f64(k * r[0]),
+                T::from_f64(k * r[1]),
+                T::from_f64(k * r[2]),
+            ],
+        }
+    }
+
+    /// The conjugate: the inverse rotation.
+    pub fn conj(self) -> Self {
+        Self {
+            w: self.w,
+            v: neg(self.v),
+        }
+    }
+
+    /// R u: a node-frame vector in the global frame.
+    pub fn rotate(self, u: Vec3<T>) -> Vec3<T> {
+        // u + 2w (v × u) + 2 v × (v × u)
+        let t = cross(self.v, u);
+        let t = add(t, t);
+        add(add(u, scale(t, self.w)), cross(self.v, t))
+    }
+
+    /// Rᵀ u: a global vector in the node frame.
+    pub fn rotate_back(self, u: Vec3<T>) -> Vec3<T> {
+        self.conj().rotate(u)
+    }
+}
+
+/// The Hamilton product `self ⊗ other`: `other` first, then `self`.
+impl<T: Real> core::ops::Mul for Quat<T> {
+    type Output = Self;
+
+    fn mul(self, other: Self) -> Self {
+        Self {
+            w: self.w * other.w - dot(self.v, other.v),
+            v: add(
+                add(scale(other.v, self.w), scale(self.v, other.w)),
+                cross(self.v, other.v),
+            ),
+        }
+    }
+}
+
+/// Position and orientation of a rigid node.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose<T> {
+    /// Position in the global frame.
+    pub position: Vec3<T>,
+    /// Orientation: node frame to global frame.
+    pub orientation: Quat<T>,
+}
+
+/// How the bushing frame is chosen (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Connectivity {
+    /// The frame of node 1; the loads depend on the node order.
+    Attached,
+    /// The mid frame between the nodes; the node order does not matter.
+    Invariant,
+}
+
+/// Loads on the two nodes, in the global frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Loads<T> {
+    /// Force on node 1 and on node 2.
+    pub force: [Vec3<T>; 2],
+    /// Moment on node 1 and on node 2, about each node's position.
+    pub moment: [Vec3<T>; 2],
+}
+
+/// The result of one 6-DOF step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SixDofOutput<T> {
+    /// Loads on the nodes.
+    pub loads: Loads<T>,
+    /// The six local strains: d in the bushing frame, then θ.
+    pub strain: [T; 6],
+    /// The six local loads: F̄, then M̄ (bushing frame).
+    pub local: [T; 6],
+    /// The six axes' algorithmic tangents dF̄_k/dx_k (bushing frame).
+    pub tangent: [T; 6],
+    /// The bushing frame: node 1's (attached) or the mid frame.
+    pub frame: Quat<T>,
+    /// Energy dissipated in the step, all axes.
+    pub dissipated: T,
+}
+
+/// Running state: the six axes'.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SixDofState<T, S> {
+    axes: [BushingState<T, S>; 6],
+}
+
+impl<T: Real, S> SixDofState<T, S> {
+    /// The state of axis `k` (0-2 translations, 3-5 rotations).
+    pub fn axis(&self, k: usize) -> Option<&BushingState<T, S>> {
+        self.axes.get(k)
+    }
+}
+
+/// The kinematics of one configuration (see the module docs).
+struct Kinematics<T> {
+    strain: [T; 6],
+    frame: Quat<T>,
+    /// d₁ = R₁f̄₁, d₂ = R₂f̄₂ and d = p₂ - p₁.
+    d1: Vec3<T>,
+    d2: Vec3<T>,
+    d: Vec3<T>,
+    /// R₁t (invariant form).
+    half: Vec3<T>,
+}
+
+/// A 6-DOF bushing: six 1D laws, two attachment points and a
+/// connectivity (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SixDof<T, B, E> {
+    axes: [Bushing<T, B, E>; 6],
+    offsets: [Vec3<T>; 2],
+    connectivity: Connectivity,
+}
+
+impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
+    /// Joins the six axis laws (translations x, y, z in length units, then
+    /// rotations x, y, z in rad) attached at `offsets` (node-frame points of
+    /// node 1 and node 2). Refuses non-finite offsets (`offset[i]`, i the
+    /// node and component as 3·node + component).
+    pub fn new(
+        axes: [Bushing<T, B, E>; 6],
+        offsets: [[f64; 3]; 2],
+        connectivity: Connectivity,
+    ) -> Result<Self, ParamError> {
+        let mut stored = [[T::ZERO; 3]; 2];
+        for (n, (out, given)) in stored.iter_mut().zip(offsets).enumerate() {
+            for (c, (o, g)) in out.iter_mut().zip(given).enumerate() {
+                *o = T::from_f64(finite(Param::item("offset", 3 * n + c), g)?);
+            }
+        }
+        Ok(Self {
+            axes,
+            offsets: stored,
+            connectivity,
+        })
+    }
+
+    /// The connectivity.
+    pub fn connectivity(&self) -> Connectivity {
+        self.connectivity
+    }
+
+    /// The law of axis `k` (0-2 translations, 3-5 rotations).
+    pub fn axis(&self, k: usize) -> Option<&Bushing<T, B, E>> {
+        self.axes.get(k)
+    }
+
+    /// A relaxed state at the configuration (node 1, node 2).
+    pub fn state_at(&self, node1: &Pose<T>, node2: &Pose<T>) -> SixDofState<T, E::State> {
+        let mut strain = self.kinematics(node1, node2).strain.into_iter();
+        SixDofState {
+            axes: self
+                .axes
+                .each_ref()
+                .map(|axis| axis.state_at(strain.next().unwrap_or(T::ZERO))),
+        }
+    }
+
+    fn kinematics(&self, node1: &Pose<T>, node2: &Pose<T>) -> Kinematics<T> {
+        let two = T::ONE + T::ONE;
+        let (q1, q2) = (node1.orientation, node2.orientation);
+        // Relative rotation, node-1 components; the shortest arc.
+        let mut q = q1.conj() * q2;
+        if q.w < T::ZERO {
+            q = Quat {
+                w: -q.w,
+                v: neg(q.v),
+            };
+        }
+        let s = dot(q.v, q.v).sqrt();
+        // θ = 2 atan2(|v|, w) v/|v| (2v at |v| = 0).
+        let k = if s > T::ZERO {
+            two * s.atan2(q.w) / s
+        } else {
+            two
+        };
+        let theta = scale(q.v, k);
+        let [o1, o2] = self.offsets;
+        let d1 = q1.rotate(o1);
+        let d2 = q2.rotate(o2);
+        let d = sub(add(node2.position, d2), add(node1.position, d1));
+        let (frame, half) = match self.connectivity {
+            Connectivity::Attached => (q1, [T::ZERO; 3]),
+            Connectivity::Invariant => {
+                // R̃ = exp(½θ×): (1 + w, v)/√(2(1 + w)); 1 + w >= 1.
+                let r2 = T::ONE / (two * (T::ONE + q.w));
+                let r = r2.sqrt();
+                let tilde = Quat {
+                    w: (T::ONE + q.w) * r,
+                    v: scale(q.v, r),
+                };
+                // t = v/(1 + w) = 2 r² v.
+                (q1 * tilde, q1.rotate(scale(q.v, two * r2)))
+            }
+        };
+        let local = frame.rotate_back(d);
+        Kinematics {
+            strain: [local[0], local[1], local[2], theta[0], theta[1], theta[2]],
+            frame,
+            d1,
+            d2,
+            d,
+            half,
+        }
+    }
+
+    /// One step to the configuration (node 1, node 2).
+    pub fn step(
+        &self,
+        state: &mut SixDofState<T, E::State>,
+        node1: &Pose<T>,
+        node2: &Pose<T>,
+    ) -> SixDofOutput<T> {
+        let k = self.kinematics(node1, node2);
+        let (mut local, mut tangent) = ([T::ZERO; 6], [T::ZERO; 6]);
+        let mut dissipated = T::ZERO;
+        for ((((axis, s), x), f), t) in self
+            .axes
+            .iter()
+            .zip(state.axes.iter_mut())
+            .zip(k.strain)
+            .zip(local.iter_mut())
+            .zip(tangent.iter_mut())
+        {
+            let o = axis.step(s, x);
+            *f = o.force;
+            *t = o.tangent;
+            dissipated += o.dissipated;
+        }
+        let force = k.frame.rotate([local[0], local[1], local[2]]);
+        let moment = k.frame.rotate([local[3], local[4], local[5]]);
+        let loads = match self.connectivity {
+            Connectivity::Attached => Loads {
+                force: [force, neg(force)],
+                moment: [
+                    add(cross(add(k.d, k.d1), force), moment),
+                    sub(neg(cross(k.d2, force)), moment),
+                ],
+            },
+            Connectivity::Invariant => {
+                // Ĩ c = ½(c - h × c), Ĩᵀ c = ½(c + h × c).
+                let c = cross(k.d, force);
+                let hc = cross(k.half, c);
+                let (to1, to2) = (scale(sub(c, hc), T::HALF), scale(add(c, hc), T::HALF));
+                Loads {
+                    force: [force, neg(force)],
+                    moment: [
+                        add(add(cross(k.d1, force), to1), moment),
+                        sub(sub(to2, cross(k.d2, force)), moment),
+                    ],
+                }
+            }
+        };
+        SixDofOutput {
+            loads,
+            strain: k.strain,
+            local,
+            tangent,
+            frame: k.frame,
+            dissipated,
+        }
+    }
+
+    /// The step without committing it: the output and the state it would
+    /// leave.
+    pub fn trial(
+        &self,
+        state: &SixDofState<T, E::State>,
+        node1: &Pose<T>,
+        node2: &Pose<T>,
+    ) -> (SixDofOutput<T>, SixDofState<T, E::State>) {
+        let mut next = state.clone();
+        let out = self.step(&mut next, node1, node2);
+        (out, next)
+    }
+}
+
+#[cfg(test)]
+mod tests;
