@@ -108,5 +108,8 @@ find scenes -name '*.toml' | sort | while read -r scene; do
     printf '%-48s %s\n' "$scene" "$(grep -E '^steps' "$out.log" | tr -s ' ')"
 done
 
+step "powertrain on three 6-DOF mounts: modes, stop/start transient, plots (docs/six-dof.md)"
+./target/release/bushing-sim powertrain --out target/powertrain
+
 step "scene cost against the sum of its parts (host instructions, callgrind)"
 cargo run -q -p bushing-sim --release -- cost --instructions scenes/maxwell4.toml

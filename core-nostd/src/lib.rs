@@ -88,6 +88,7 @@ pub mod six_dof;
 pub mod stack;
 pub mod temperature;
 pub mod tracker;
+pub mod viscous;
 pub mod xf;
 
 #[cfg(feature = "fixed")]
@@ -106,4 +107,5 @@ pub use real::MicromathExp;
 pub use real::{Exponentials, LibmExp, Real};
 pub use stack::{FirstLoading, KfTable, Relaxation, StackState, Sts, TurningPoints};
 pub use temperature::ShiftFactor;
+pub use viscous::Dashpot;
 pub use xf::{XfBank, XfForm, XfSpec};

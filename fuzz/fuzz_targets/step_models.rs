@@ -4,15 +4,18 @@
 //! pattern). Construction must end in a model or a typed error; a step
 //! must never panic; a refused input (non-finite, or beyond the backbone's
 //! guard) must leave the force unchanged; an accepted one must give a
-//! finite force, tangent and dissipated energy.
+//! finite force, tangent and dissipated energy. The 6-DOF bushing is driven
+//! by arbitrary node poses: a refused configuration holds its loads, an
+//! accepted one gives finite loads.
 #![no_main]
 
 use arbitrary::{Result, Unstructured};
+use bushing::six_dof::{Connectivity, Pose, Quat, SixDof};
 use bushing::tracker::{Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning, UtParams};
 use bushing::{
-    Backbone, Berg, BoucWen, Bushing, Dahl, Effect, FirstLoading, FractionalSpec, Grunwald,
-    IwanBank, IwanCellSpec, IwanSliders, MaxwellBank, MaxwellForm, MaxwellSpec, MonotoneSpline,
-    Polynomial, Sts, TurningPoints, XfBank, XfForm, XfSpec,
+    Backbone, Berg, BoucWen, Bushing, Dahl, Dashpot, Effect, FirstLoading, FractionalSpec,
+    Grunwald, IwanBank, IwanCellSpec, IwanSliders, MaxwellBank, MaxwellForm, MaxwellSpec,
+    MonotoneSpline, Polynomial, Sts, TurningPoints, XfBank, XfForm, XfSpec,
 };
 use libfuzzer_sys::fuzz_target;
 
@@ -54,7 +57,7 @@ fn one_model(u: &mut Unstructured<'_>) -> Result<()> {
         Err(_) => Polynomial::<f32, 4>::new(&[0.0, 150.0, 0.0, 4.0], (-6.0, 6.0))
             .expect("the fallback backbone"),
     };
-    match u.int_in_range(0u8..=11)? {
+    match u.int_in_range(0u8..=13)? {
         0 => {
             let form = MaxwellForm::ALL[u.choose_index(MaxwellForm::ALL.len())?];
             let cells = [
@@ -162,7 +165,79 @@ fn one_model(u: &mut Unstructured<'_>) -> Result<()> {
             }
             drive(u, backbone, bank)?;
         }
+        10 => {
+            if let Ok(d) = Dashpot::<f32>::new(param(u, 1e-6, 1e3)?, dt) {
+                drive(u, backbone, d)?;
+            }
+        }
+        11 => six_dof(u)?,
         _ => tracker(u, dt)?,
+    }
+    Ok(())
+}
+
+/// A node pose: mostly plausible, sometimes any bit pattern.
+fn pose(u: &mut Unstructured<'_>) -> Result<Pose<f32>> {
+    let mut r = [0.0; 3];
+    let mut p = [0.0f32; 3];
+    for (ri, pi) in r.iter_mut().zip(p.iter_mut()) {
+        *ri = param(u, -3.0, 3.0)?;
+        *pi = input(u)?;
+    }
+    let mut orientation = Quat::from_rotation_vector(r);
+    if u.ratio(1u8, 16)? {
+        orientation.w = f32::from_bits(u.arbitrary()?);
+    }
+    Ok(Pose {
+        position: p,
+        orientation,
+    })
+}
+
+/// A 6-DOF bushing of six arbitrary linear laws and offsets, in either
+/// connectivity, between two arbitrary moving nodes: a refused
+/// configuration holds the loads; an accepted one gives finite loads.
+fn six_dof(u: &mut Unstructured<'_>) -> Result<()> {
+    let mut laws = Vec::new();
+    for _ in 0..6 {
+        match Polynomial::<f32, 2>::linear(param(u, 1e-3, 1e6)?).and_then(|p| Bushing::new(p, ())) {
+            Ok(b) => laws.push(b),
+            Err(_) => return Ok(()),
+        }
+    }
+    let Ok(axes) = <[_; 6]>::try_from(laws) else {
+        return Ok(());
+    };
+    let mut offsets = [[0.0; 3]; 2];
+    for o in offsets.iter_mut().flatten() {
+        *o = param(u, -100.0, 100.0)?;
+    }
+    let connectivity = if u.arbitrary()? {
+        Connectivity::Invariant
+    } else {
+        Connectivity::Attached
+    };
+    let Ok(b) = SixDof::new(axes, offsets, connectivity) else {
+        return Ok(());
+    };
+    let (n1, n2) = (pose(u)?, pose(u)?);
+    let mut s = b.state_at(&n1, &n2);
+    for _ in 0..u.int_in_range(1usize..=64)? {
+        let (n1, n2) = (pose(u)?, pose(u)?);
+        let before = s.loads();
+        let faults = s.faults();
+        let out = b.step(&mut s, &n1, &n2);
+        if s.faults() != faults {
+            assert!(
+                out.loads == before,
+                "a refused configuration changed the loads"
+            );
+        }
+        let sum = |f: &[[f32; 3]; 2]| f.iter().flatten().all(|x| x.is_finite());
+        assert!(
+            sum(&out.loads.force) && sum(&out.loads.moment),
+            "non-finite loads"
+        );
     }
     Ok(())
 }

@@ -16,6 +16,7 @@ pub mod fractional_report;
 pub mod iwan_report;
 pub mod model;
 pub mod modulus;
+pub mod powertrain;
 pub mod profile;
 pub mod run;
 pub mod scene;

@@ -5,8 +5,8 @@ use std::process::ExitCode;
 
 use bushing_sim::scene::NumberType;
 use bushing_sim::{
-    Scene, accuracy_cost, compare, cost, fractional_report, iwan_report, modulus, run, validate,
-    xf_report,
+    Scene, accuracy_cost, compare, cost, fractional_report, iwan_report, modulus, powertrain, run,
+    validate, xf_report,
 };
 
 const USAGE: &str = "\
@@ -21,6 +21,8 @@ usage:
   bushing-sim xf-table [--out FILE]        saturation of the x_f cell forms against the step
   bushing-sim iwan-table [--out FILE]      Iwan discretisations of the STS and Segalman laws
   bushing-sim fractional-table [--out FILE]  Grünwald accuracy, Maxwell fits and their cost
+  bushing-sim powertrain --out DIR          the engine on three 6-DOF mounts (seed 000 §5.2): modes against
+                                           Table 5.2, stop/start transient with viscous and STS mounts
   bushing-sim compare-trace HOST_TRACE.csv FIRMWARE.log [--within N]
                                            a firmware's logged forces against a host trace (trace_every = 1):
                                            bit-identical, or within N newtons
@@ -98,6 +100,10 @@ fn dispatch(args: &[String]) -> Result<(), String> {
                 }
                 _ => print!("{text}"),
             }
+            Ok(())
+        }
+        ["powertrain", "--out", dir] => {
+            print!("{}", powertrain::report(&PathBuf::from(dir))?);
             Ok(())
         }
         ["compare-trace", rest @ ..] => {

@@ -3,7 +3,10 @@ extern crate std;
 use super::*;
 use crate::{IwanBank, IwanCellSpec, MaxwellBank, MaxwellForm, MaxwellSpec, Polynomial};
 
-type Axis = Bushing<f64, Polynomial<f64, 4>, (MaxwellBank<f64, 2>, IwanBank<f64, 2>)>;
+type Effects = (MaxwellBank<f64, 2>, IwanBank<f64, 2>);
+type Axis = Bushing<f64, Polynomial<f64, 4>, Effects>;
+type Mount = SixDof<f64, Polynomial<f64, 4>, Effects>;
+type MountState = SixDofState<f64, <Effects as Effect<f64>>::State>;
 
 /// An odd, hardening law with two Maxwell cells and two Jenkins cells:
 /// stiffness `k`, cubic term `c`, slip forces scaled by `slip`.
@@ -224,4 +227,114 @@ fn non_finite_offsets_are_refused_by_name() {
             param: Param::item("offset", 4)
         })
     );
+}
+
+/// The loads as one vector (f₁, m₁, f₂, m₂).
+fn flat(l: &Loads<f64>) -> [f64; 12] {
+    let mut out = [0.0; 12];
+    let parts = [l.force[0], l.moment[0], l.force[1], l.moment[1]];
+    for (o, x) in out.iter_mut().zip(parts.iter().flatten()) {
+        *o = *x;
+    }
+    out
+}
+
+/// `p` moved by `u` and turned by the global rotation vector `r`.
+fn moved(p: &Pose<f64>, u: [f64; 3], r: [f64; 3]) -> Pose<f64> {
+    Pose {
+        position: add(p.position, u),
+        orientation: Quat::from_rotation_vector(r) * p.orientation,
+    }
+}
+
+/// Largest difference between the tangent and central differences of the
+/// trial loads (step 1e-6), over the largest tangent entry.
+fn tangent_error(b: &Mount, s: &MountState, n1: &Pose<f64>, n2: &Pose<f64>) -> f64 {
+    let (out, _) = b.trial(s, n1, n2);
+    let k = b.tangent(&out, n1, n2);
+    let h = 1e-6;
+    let (mut worst, mut big) = (0.0f64, 0.0f64);
+    for j in 0..12 {
+        let mut e = [0.0; 3];
+        e[j % 3] = h;
+        let z = [0.0; 3];
+        let shift = |sign: f64| {
+            let e = scale(e, sign);
+            let (u, r) = if (j / 3) % 2 == 0 { (e, z) } else { (z, e) };
+            if j < 6 {
+                (moved(n1, u, r), *n2)
+            } else {
+                (*n1, moved(n2, u, r))
+            }
+        };
+        let ((p1, p2), (m1, m2)) = (shift(1.0), shift(-1.0));
+        let plus = flat(&b.trial(s, &p1, &p2).0.loads);
+        let minus = flat(&b.trial(s, &m1, &m2).0.loads);
+        for i in 0..12 {
+            let fd = (plus[i] - minus[i]) / (2.0 * h);
+            worst = worst.max((k[i][j] - fd).abs());
+            big = big.max(k[i][j].abs());
+        }
+    }
+    worst / big
+}
+
+#[test]
+fn tangent_matches_finite_differences() {
+    for connectivity in [Connectivity::Attached, Connectivity::Invariant] {
+        let b = SixDof::new(anisotropic(), [OFFSET_A, OFFSET_B], connectivity).unwrap();
+        // After a loaded history, at a relative rotation of about a radian.
+        let (a0, b0) = poses(0);
+        let mut s = b.state_at(&a0, &b0);
+        for i in 1..100 {
+            let (na, nb) = poses(i);
+            b.step(&mut s, &na, &nb);
+        }
+        let (na, nb) = poses(100);
+        let large = tangent_error(&b, &s, &na, &nb);
+        // From rest, a small rotation (the series branch, φ < 0.1).
+        let rest = b.state_at(&a0, &a0);
+        let near = moved(&a0, [0.3, -0.2, 0.1], [0.02, -0.03, 0.01]);
+        let small = tangent_error(&b, &rest, &a0, &near);
+        std::println!(
+            "{connectivity:?}: tangent error {large:.1e} (large rotation), {small:.1e} (small)"
+        );
+        assert!(
+            large < 1e-6 && small < 1e-6,
+            "{connectivity:?}: {large} {small}"
+        );
+    }
+}
+
+#[test]
+fn unusable_configurations_are_refused_and_the_loads_held() {
+    let b = SixDof::new(anisotropic(), [OFFSET_A, OFFSET_B], Connectivity::Invariant).unwrap();
+    let (a0, b0) = poses(0);
+    let mut s = b.state_at(&a0, &b0);
+    let (a1, b1) = poses(30);
+    let held = b.step(&mut s, &a1, &b1).loads;
+    let before = s.clone();
+    let mut nan = b1;
+    nan.position[1] = f64::NAN;
+    let o = b.step(&mut s, &a1, &nan);
+    assert_eq!(o.loads, held);
+    assert_eq!(o.dissipated, 0.0);
+    assert!(s.faults().contains(Faults::NON_FINITE_INPUT));
+    let mut huge = b1;
+    huge.position[0] = 1e300;
+    b.step(&mut s, &a1, &huge);
+    assert!(s.faults().contains(Faults::OUT_OF_RANGE));
+    let mut scaled = b1;
+    scaled.orientation.w *= 1.01;
+    assert_eq!(b.step(&mut s, &a1, &scaled).loads, held);
+    // Nothing else moved.
+    for k in 0..6 {
+        assert_eq!(s.axis(k), before.axis(k));
+    }
+    assert_eq!(s.loads(), held);
+    s.clear_faults();
+    assert!(s.faults().is_empty());
+    // The next usable step goes on from the held state.
+    let (a2, b2) = poses(31);
+    assert!(b.step(&mut s, &a2, &b2).loads.force[0][0].is_finite());
 }
