@@ -38,7 +38,20 @@ pub struct EffectOutput<T> {
     /// Algorithmic tangent dF_n/dx_n of that force, the state at the start
     /// of the step held fixed.
     pub tangent: T,
-    /// Energy dissipated by the effect during the step (>= 0).
+    /// Energy dissipated by the effect during the step: the work done on
+    /// its branches over the step less the change of the energy they
+    /// store, in the unit of force times displacement (N·mm = mJ).
+    ///
+    /// The contract, for every effect of the crate: finite whenever the
+    /// step is accepted (a total that leaves the working type is replaced
+    /// by 0 and [`Faults::ENERGY_OVERFLOW`] raised), and `>= 0` on every
+    /// single step, with one exception: the Grünwald cell
+    /// ([`crate::Grunwald`]) stores energy in its whole history, which its
+    /// balance cannot see step by step, so a single step may report a
+    /// small negative value; its sum over a closed steady cycle is the
+    /// loop area. Each effect's docs say how its energy is integrated over
+    /// the step (a trapezoid of the rate, or the exact work of a
+    /// turning-point law).
     pub dissipated: T,
 }
 
@@ -50,6 +63,14 @@ impl<T: Real> EffectOutput<T> {
             tangent: T::ZERO,
             dissipated: T::ZERO,
         }
+    }
+
+    /// Force and tangent finite and within [`Real::GUARD`] in magnitude
+    /// (a NaN fails): what an accepted bushing step guarantees of each
+    /// effect.
+    #[inline(always)]
+    pub fn guarded(&self) -> bool {
+        within(self.force) && within(self.tangent)
     }
 
     fn plus(self, o: Self) -> Self {
@@ -92,6 +113,41 @@ pub trait Effect<T: Real> {
     }
     /// Sum of the branch outputs of a report.
     fn total(report: &Self::Report) -> EffectOutput<T>;
+
+    /// Whether every effect of a report has a finite force and tangent
+    /// within [`Real::GUARD`] (a NaN fails). A tuple asks each member.
+    #[inline(always)]
+    fn guarded(report: &Self::Report) -> bool {
+        Self::total(report).guarded()
+    }
+
+    /// Advances the state by one step if `accept` takes the report, and
+    /// otherwise leaves the state exactly as it was and returns `None`.
+    /// The default steps a copy of the state and commits it (a copy of a
+    /// few words for the banks of the crate); an effect whose state is
+    /// costly to copy may override it.
+    #[inline(always)]
+    fn step_if(
+        &self,
+        state: &mut Self::State,
+        drive: &Drive<T>,
+        accept: impl FnOnce(&Self::Report) -> bool,
+    ) -> Option<Self::Report> {
+        let mut next = state.clone();
+        let report = self.step(&mut next, drive);
+        if accept(&report) {
+            *state = next;
+            Some(report)
+        } else {
+            None
+        }
+    }
+}
+
+/// Finite and within [`Real::GUARD`] in magnitude (a NaN fails).
+#[inline(always)]
+fn within<T: Real>(v: T) -> bool {
+    v.abs() <= T::GUARD
 }
 
 impl<T: Real> Effect<T> for () {
@@ -140,6 +196,10 @@ impl<T: Real, E: Effect<T>> Effect<T> for Option<E> {
     fn total(report: &Self::Report) -> EffectOutput<T> {
         report.as_ref().map_or(EffectOutput::zero(), E::total)
     }
+    #[inline(always)]
+    fn guarded(report: &Self::Report) -> bool {
+        report.as_ref().is_none_or(E::guarded)
+    }
 }
 
 fn same_dt(a: Option<f64>, b: Option<f64>) -> Result<Option<f64>, ParamError> {
@@ -175,6 +235,10 @@ macro_rules! tuple_effect {
             #[inline(always)]
             fn total(report: &Self::Report) -> EffectOutput<T> {
                 EffectOutput::zero() $(.plus($name::total(&report.$idx)))+
+            }
+            #[inline(always)]
+            fn guarded(report: &Self::Report) -> bool {
+                true $(&& $name::guarded(&report.$idx))+
             }
         }
     };
@@ -250,9 +314,14 @@ pub struct Output<T, R> {
 /// A backbone plus a set of effects (see the module docs).
 ///
 /// `step` never panics. A non-finite input, or one where the backbone force
-/// or tangent exceeds [`Real::GUARD`], is refused: the state is kept, the
-/// last force and tangent are returned with zero dissipation, and a fault
-/// flag is raised in the state.
+/// or tangent exceeds [`Real::GUARD`], is refused; so is a step where an
+/// effect's force or tangent, or the bushing's total, would not be finite
+/// or would exceed [`Real::GUARD`] (a turning-point law or a fractional
+/// cell driven far beyond its data). A refused step keeps the state, returns
+/// the last force and tangent with zero dissipation and raises a fault flag
+/// in the state ([`Faults::NON_FINITE_INPUT`], [`Faults::OUT_OF_RANGE`] or
+/// [`Faults::FORCE_OUT_OF_RANGE`]). Every accepted step's force and tangent
+/// are finite and within the guard.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Bushing<T, B, E> {
     backbone: B,
@@ -342,16 +411,25 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
             df_inf: f_inf - state.f_inf,
             k_inf,
         };
-        let report = self.effects.step(&mut state.effects, &drive);
+        let elastic = self.g0 * f_inf;
+        let elastic_tangent = self.g0 * k_inf;
+        // The effects' new state is committed only if every effect's force
+        // and tangent, and the totals, stay finite and within the guard.
+        let accept = |r: &E::Report| {
+            let t = E::total(r);
+            E::guarded(r) && within(elastic + t.force) && within(elastic_tangent + t.tangent)
+        };
+        let Some(report) = self.effects.step_if(&mut state.effects, &drive, accept) else {
+            return refuse(state, self.g0, Faults::FORCE_OUT_OF_RANGE);
+        };
         let total = E::total(&report);
         let dissipated = if total.dissipated.is_finite() {
             total.dissipated
         } else {
             overflowed(state)
         };
-        let elastic = self.g0 * f_inf;
         let force = elastic + total.force;
-        let tangent = self.g0 * k_inf + total.tangent;
+        let tangent = elastic_tangent + total.tangent;
         state.x = x;
         state.f_inf = f_inf;
         state.force = force;

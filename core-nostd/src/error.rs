@@ -254,6 +254,24 @@ pub(crate) fn scaled<T: crate::Real>(param: Param, value: f64) -> Result<f64, Pa
     }
 }
 
+/// Checks that a finite `value` is within [`crate::Real::GUARD`] of the
+/// working type in magnitude (`[-GUARD, GUARD]`): a value a law stores and
+/// multiplies by distances or forces.
+pub(crate) fn guarded<T: crate::Real>(param: Param, value: f64) -> Result<f64, ParamError> {
+    let max = T::GUARD.to_f64();
+    if value.abs() <= max {
+        Ok(value)
+    } else {
+        Err(ParamError::OutOfRange {
+            param,
+            value,
+            min: -max,
+            min_open: false,
+            max,
+        })
+    }
+}
+
 /// Checks that `value` is finite and in `[min, max]` (`min` excluded when
 /// `min_open`).
 pub(crate) fn in_range(
@@ -306,6 +324,11 @@ impl Faults {
     /// zero): the step was taken, its force and tangent are valid, and it
     /// reports no dissipated energy.
     pub const ENERGY_OVERFLOW: Self = Self(4);
+    /// A step would have given an effect a force or tangent, or the
+    /// bushing a total force or tangent, that is not finite or exceeds
+    /// [`crate::Real::GUARD`] (a law driven far beyond its data): the step
+    /// was refused and the state kept.
+    pub const FORCE_OUT_OF_RANGE: Self = Self(8);
 
     /// True if no flag is raised.
     pub const fn is_empty(self) -> bool {

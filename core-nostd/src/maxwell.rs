@@ -50,6 +50,11 @@
 //!   subtraction fewer, for banks whose every ω dt is above about 1e-3);
 //!   [`Compensated`](crate::Compensated) adds a Fast2Sum word (exact decay
 //!   down to ω dt = 1e-7, three additions more).
+//! - **Dissipation**: the dashpot of cell i dissipates `ω_i F_i² / (g_i K^∞)`
+//!   per unit time (its force over its damping coefficient); the step
+//!   reports `Σ ω_i Δt (F_i,n-1² + F_i,n²) / (2 g_i K^∞)`, the trapezoid
+//!   over the step, never negative. Over a steady cycle it tends to the loop
+//!   area π X² K'' as the step shrinks (checked by `bushing-sim validate`).
 //! - **Cost**: rate forms 2 multiply-adds per cell, load forms 4; the
 //!   dissipated energy adds 3 per cell and one division per bank by K^∞.
 //!   [`Effect::step_force`] skips the energy and the tangent. Measured on a

@@ -526,13 +526,24 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
     /// point) are included; the matrix is not symmetric in general (the
     /// moment of an anisotropic law is not the gradient of a potential in
     /// either form). The formulas are in the `tangent` module source.
+    ///
+    /// `None` when there is no tangent to give: the configuration is one
+    /// [`SixDof::step`] refuses (a NaN or huge position, an orientation
+    /// that is not a rotation), or an entry would not be finite in the
+    /// working type. The matrix returned never holds a NaN or an infinity;
+    /// after a refused step, ask again at the last accepted configuration.
     pub fn tangent(
         &self,
         out: &SixDofOutput<T>,
         node1: &Pose<T>,
         node2: &Pose<T>,
-    ) -> [[T; 12]; 12] {
-        tangent::tangent(self.connectivity, &self.kinematics(node1, node2), out)
+    ) -> Option<[[T; 12]; 12]> {
+        let k = self.kinematics(node1, node2);
+        if !k.usable() || !out.local.iter().chain(&out.tangent).all(|v| v.is_finite()) {
+            return None;
+        }
+        let m = tangent::tangent(self.connectivity, &k, out);
+        m.iter().flatten().all(|v| v.is_finite()).then_some(m)
     }
 
     /// The step without committing it: the output and the state it would

@@ -381,13 +381,75 @@ impl<T> EffectList<T> {
     }
 }
 
+impl<T: Real> EffectList<T> {
+    /// Steps every slot in place (keeping its state aside first when
+    /// `keep`): the total, and whether every effect's own output is
+    /// within the guard.
+    #[inline(always)]
+    fn advance(
+        &self,
+        state: &mut [Slot<T>],
+        drive: &Drive<T>,
+        keep: bool,
+    ) -> (EffectOutput<T>, bool) {
+        let mut total = EffectOutput::zero();
+        let mut guarded = true;
+        for (e, slot) in self.effects.iter().zip(state.iter_mut()) {
+            if keep {
+                slot.before.0.copy_from(&slot.state);
+                slot.before.1 = slot.last;
+            }
+            let out = e.step(&mut slot.state, drive);
+            slot.last = out;
+            guarded &= out.guarded();
+            total.force += out.force;
+            total.tangent += out.tangent;
+            total.dissipated += out.dissipated;
+        }
+        (total, guarded)
+    }
+}
+
 /// State of one effect of an [`EffectList`], with what its last step gave.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Slot<T: Real> {
     /// The effect's state.
     pub state: AnyState<T>,
     /// Output of the effect's last step.
     pub last: EffectOutput<T>,
+    /// The state and output before the step in progress, kept so that a
+    /// refused step can be undone without allocating (not part of the
+    /// state's value: equality ignores it).
+    before: (AnyState<T>, EffectOutput<T>),
+}
+
+impl<T: Real> PartialEq for Slot<T> {
+    fn eq(&self, other: &Self) -> bool {
+        self.state == other.state && self.last == other.last
+    }
+}
+
+impl<T: Real> AnyState<T> {
+    /// Makes `self` equal to `src`, reusing `self`'s storage when both are
+    /// of the same kind (no allocation in a running list).
+    fn copy_from(&mut self, src: &Self) {
+        match (self, src) {
+            (Self::Maxwell(d), Self::Maxwell(s)) => match (d, s) {
+                (DynMaxwellState::Plain(d), DynMaxwellState::Plain(s)) => d.clone_from(s),
+                (DynMaxwellState::Multiplied(d), DynMaxwellState::Multiplied(s)) => d.clone_from(s),
+                (DynMaxwellState::Compensated(d), DynMaxwellState::Compensated(s)) => {
+                    d.clone_from(s)
+                }
+                (d, s) => d.clone_from(s),
+            },
+            (Self::Clamp(d), Self::Clamp(s)) => {
+                d.0.clone_from(&s.0);
+                d.1 = s.1;
+            }
+            (Self::Sliders(d), Self::Sliders(s)) | (Self::Xf(d), Self::Xf(s)) => d.clone_from(s),
+            (d, s) => d.clone_from(s),
+        }
+    }
 }
 
 impl<T: Real> Effect<T> for EffectList<T> {
@@ -408,26 +470,42 @@ impl<T: Real> Effect<T> for EffectList<T> {
     fn rest(&self, x0: T) -> Self::State {
         self.effects
             .iter()
-            .map(|e| Slot {
-                state: e.rest(x0),
-                last: EffectOutput::zero(),
+            .map(|e| {
+                let state = e.rest(x0);
+                Slot {
+                    before: (state.clone(), EffectOutput::zero()),
+                    state,
+                    last: EffectOutput::zero(),
+                }
             })
             .collect()
     }
     #[inline(always)]
     fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> EffectOutput<T> {
-        let mut total = EffectOutput::zero();
-        for (e, slot) in self.effects.iter().zip(state.iter_mut()) {
-            let out = e.step(&mut slot.state, drive);
-            slot.last = out;
-            total.force += out.force;
-            total.tangent += out.tangent;
-            total.dissipated += out.dissipated;
-        }
-        total
+        self.advance(state, drive, false).0
     }
     fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
         *report
+    }
+    /// Steps every slot in place after keeping its state aside, and
+    /// undoes every slot when one effect's output leaves the guard or
+    /// `accept` refuses the total: the default's copy of the whole list
+    /// would allocate on every step.
+    fn step_if(
+        &self,
+        state: &mut Self::State,
+        drive: &Drive<T>,
+        accept: impl FnOnce(&EffectOutput<T>) -> bool,
+    ) -> Option<EffectOutput<T>> {
+        let (total, guarded) = self.advance(state, drive, true);
+        if guarded && accept(&total) {
+            return Some(total);
+        }
+        for slot in state.iter_mut() {
+            std::mem::swap(&mut slot.state, &mut slot.before.0);
+            slot.last = slot.before.1;
+        }
+        None
     }
 }
 

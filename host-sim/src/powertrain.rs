@@ -27,7 +27,7 @@
 //!   the rotational stiffnesses over ω².
 
 use bushing::six_dof::{Connectivity, Pose, Quat, SixDof, Vec3};
-use bushing::{Bushing, Dashpot, FirstLoading, ParamError, Polynomial, Sts, TurningPoints};
+use bushing::{Bushing, Dashpot, FirstLoading, Param, ParamError, Polynomial, Sts, TurningPoints};
 
 /// Table 5.2: the six modes of the powertrain suspension, Hz.
 pub const TABLE_5_2: [(&str, f64); 6] = [
@@ -174,7 +174,11 @@ impl Suspension {
                 orientation: Quat::identity(),
             };
             let (out, _) = mount.trial(&mount.state_at(&chassis, &cg), &chassis, &cg);
-            let t = mount.tangent(&out, &chassis, &cg);
+            let t = mount
+                .tangent(&out, &chassis, &cg)
+                .ok_or(ParamError::NotFinite {
+                    param: Param::scalar("mount tangent"),
+                })?;
             for (row, t_row) in k.iter_mut().zip(&t[6..]) {
                 for (x, t) in row.iter_mut().zip(&t_row[6..]) {
                     *x -= t;

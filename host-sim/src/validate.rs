@@ -13,6 +13,7 @@
 //! | Iwan (clamp on a linear backbone, or slider) | energy per steady cycle | Masing loop of each Jenkins cell: `Σ 4 F_f,i (A - x_f,i)` over the cells that slip, `x_f,i = F_f,i / (g_i k)` with k the backbone slope (clamp) or k_ref (slider) |
 //! | Iwan | half the peak-to-peak force of the steady loop | `Σ min(F_f,i, g_i k A)` |
 //! | turning points | half peak-to-peak force, energy per cycle | Masing loop of the law: `H(2A)/2` and `2 ∫_0^{2A} H - 2A H(2A)` |
+//! | Iwan, turning points | energy of an asymmetric inner loop: from rest at the profile's start x0 to x0 ± A, then twice between x0 + 0.2A and x0 + 0.6A at 10 steps per branch | Masing loop of span 0.4A (as above) |
 //! | x_f (linear backbone; triangle, or sine with ω_i = 0) | half peak-to-peak force | each cell is Dahl's law of exponent 1 in x with `λ = ω/v + 1/x_f`, saturation `g K^∞ / λ` (`g K^∞ x_f` at ω = 0): tip `g K^∞ tanh(λ A) / λ` |
 //! | Dahl | half peak-to-peak force | saturation `f_f`; loop tip `f_f tanh(k_d A / f_f)` (α = 1), else the root of the closed-form travel |
 //! | Bouc-Wen | half peak-to-peak force | ultimate force `α w_u`; loop tip from the travel `∫ dw / (A - (γ + β sgn w) \|w\|^n) = 2A` |
@@ -345,6 +346,7 @@ fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
         k_lin,
         g0: bushing.g0(),
         t0,
+        inner: inner_loop_energies::<T>(scene, p.amplitude)?,
     };
     let mut checks = Vec::new();
     for (j, (effect, name)) in scene.effects.iter().zip(&names).enumerate() {
@@ -366,6 +368,55 @@ struct Ctx<'a> {
     k_lin: Option<f64>,
     g0: f64,
     t0: f64,
+    /// Each effect's energy over the asymmetric inner loop.
+    inner: Vec<f64>,
+}
+
+/// Steps per branch of the asymmetric inner loop.
+const INNER_STEPS: usize = 10;
+/// Span of the asymmetric inner loop, over the amplitude.
+const INNER_SPAN: f64 = 0.4;
+
+/// Each effect's energy over an asymmetric inner loop: from rest at the
+/// profile's start x0 to x0 + A and x0 - A (50 steps per half amplitude),
+/// then twice between x0 + 0.2 A and x0 + 0.6 A at [`INNER_STEPS`] per
+/// branch, the second loop measured (NaN for an effect if a step was
+/// refused). The symmetric loops of the profile return onto the first
+/// loading curve; this loop closes on a turning point inside an outer loop,
+/// where a law has to split the closing step between the two branches.
+fn inner_loop_energies<T: Real + 'static>(scene: &Scene, a: f64) -> Result<Vec<f64>, String> {
+    let mut bushing = model::compile::<T>(scene).map_err(|e| e.to_string())?;
+    let x0 = scene.input(0.0);
+    let (lo, hi) = (x0 + 0.2 * a, x0 + (0.2 + INNER_SPAN) * a);
+    let mut path = Vec::new();
+    let mut x = x0;
+    for (target, steps) in [(x0 + a, 50), (x0 - a, 100), (hi, 80)] {
+        path.extend((1..=steps).map(|k| (x + (target - x) * k as f64 / steps as f64, false)));
+        x = target;
+    }
+    let n = INNER_STEPS;
+    for measured in [false, true] {
+        path.extend((1..=2 * n).map(|k| {
+            let u = if k <= n { k } else { 2 * n - k } as f64 / n as f64;
+            (hi - (hi - lo) * u, measured)
+        }));
+    }
+    let mut energy = vec![0.0; model::effect_names(scene).len()];
+    let (mut rows, mut outputs) = (Vec::with_capacity(1), Vec::with_capacity(energy.len()));
+    for (x, measured) in path {
+        rows.clear();
+        outputs.clear();
+        bushing.step_into(&[T::from_f64(x)], &mut rows, &mut outputs);
+        let refused = rows.first().is_none_or(|r| r.refused);
+        for (j, e) in energy.iter_mut().enumerate() {
+            match outputs.get(j) {
+                _ if refused => *e = f64::NAN,
+                Some(o) if measured => *e += o.dissipated.to_f64(),
+                _ => {}
+            }
+        }
+    }
+    Ok(energy)
 }
 
 type Line = (String, &'static str, Outcome);
@@ -386,6 +437,18 @@ fn compared(what: impl Into<String>, unit: &'static str, reference: f64, measure
 }
 
 impl Ctx<'_> {
+    /// The asymmetric inner loop's energy of effect `j` against `reference`.
+    fn inner_loop(&self, reference: f64, j: usize) -> Line {
+        compared(
+            format!(
+                "energy of an asymmetric inner loop (x0 + 0.2A to x0 + 0.6A after x0 +- A, {INNER_STEPS} steps per branch), Masing loop of span 0.4A"
+            ),
+            "mJ",
+            reference,
+            self.inner.get(j).copied().unwrap_or(f64::NAN),
+        )
+    }
+
     fn checks<T: Real>(&self, effect: &Effect, w: &Window, j: usize) -> Vec<Line> {
         let a = self.p.amplitude;
         let swing = w.swing(j);
@@ -407,20 +470,21 @@ impl Ctx<'_> {
                     return no("the clamp form's Masing loop needs a linear backbone");
                 };
                 let form = if *slider { "k_ref" } else { "backbone slope" };
-                let mut energy_ref = 0.0;
-                let mut tip = 0.0;
-                for c in cells {
-                    let x_f = c.slip_force / (c.g * k);
-                    energy_ref += 4.0 * c.slip_force * (a - x_f).max(0.0);
-                    tip += c.slip_force.min(c.g * k * a);
-                }
+                let iwan_loop = |span: f64| -> f64 {
+                    let a = 0.5 * span;
+                    cells
+                        .iter()
+                        .map(|c| 4.0 * c.slip_force * (a - c.slip_force / (c.g * k)).max(0.0))
+                        .sum()
+                };
+                let tip = cells.iter().map(|c| c.slip_force.min(c.g * k * a)).sum();
                 vec![
                     compared(
                         format!(
                             "energy per steady cycle, Masing loops sum 4 F_f (A - x_f), x_f = F_f / (g k), k = {form} {k} N/mm"
                         ),
                         "mJ",
-                        energy_ref,
+                        iwan_loop(2.0 * a),
                         per_cycle,
                     ),
                     compared(
@@ -429,6 +493,7 @@ impl Ctx<'_> {
                         tip,
                         swing,
                     ),
+                    self.inner_loop(iwan_loop(INNER_SPAN * a), j),
                 ]
             }
             Effect::TurningPoints { law, .. } => {
@@ -436,15 +501,20 @@ impl Ctx<'_> {
                 let Some(h2a) = h(2.0 * a) else {
                     return no("the law could not be built");
                 };
-                let integral = simpson(|d| h(d).unwrap_or(f64::NAN), 0.0, 2.0 * a, 20_000);
+                // Masing's loop of span s: 2 ∫_0^s H - s H(s).
+                let masing = |s: f64| {
+                    let integral = simpson(|d| h(d).unwrap_or(f64::NAN), 0.0, s, 20_000);
+                    2.0 * integral - s * h(s).unwrap_or(f64::NAN)
+                };
                 vec![
                     compared("half peak-to-peak force, H(2A)/2", "N", 0.5 * h2a, swing),
                     compared(
                         "energy per steady cycle, Masing loop 2 int_0^2A H - 2A H(2A)",
                         "mJ",
-                        2.0 * integral - 2.0 * a * h2a,
+                        masing(2.0 * a),
                         per_cycle,
                     ),
+                    self.inner_loop(masing(INNER_SPAN * a), j),
                 ]
             }
             Effect::Xf { cells, .. } => {

@@ -251,7 +251,7 @@ fn moved(p: &Pose<f64>, u: [f64; 3], r: [f64; 3]) -> Pose<f64> {
 /// trial loads (step 1e-6), over the largest tangent entry.
 fn tangent_error(b: &Mount, s: &MountState, n1: &Pose<f64>, n2: &Pose<f64>) -> f64 {
     let (out, _) = b.trial(s, n1, n2);
-    let k = b.tangent(&out, n1, n2);
+    let k = b.tangent(&out, n1, n2).expect("a usable configuration");
     let h = 1e-6;
     let (mut worst, mut big) = (0.0f64, 0.0f64);
     for j in 0..12 {
