@@ -8,10 +8,14 @@
 #   2. bushing-sim runs the same scene in f32 and in f64;
 #   3. the M4F force trace must equal the f32 host trace bit for bit, and the
 #      M3 trace must stay within one DAC step (0.125 N) of the f64 trace;
-#   4. the panic-never link check: both release images link with
-#      `panic-never` (no panicking branch left), and the M4F image fails to
-#      link when a bounds-checked index is added on purpose (feature
-#      deliberate-panic).
+#   4. the every-model firmware (every public model and tracker of the core,
+#      built from black-boxed parameters and stepped) runs on both cores:
+#      f32 on the M4F, Q16 on the M3 (the oscillator and the tracker in f32
+#      soft float); it fails if a model refuses its parameters or faults;
+#   5. the panic-never link check: the release images of the rig loop and of
+#      every-model link with `panic-never` on both cores (no panicking
+#      branch left), and the M4F rig loop fails to link when a bounds-checked
+#      index is added on purpose (feature deliberate-panic).
 # Logs and traces go to target/rig-loop/. Needs the Cortex-M targets and
 # qemu-system-arm (scripts/test.sh installs them).
 set -euo pipefail
@@ -42,11 +46,21 @@ step "M4F force trace against bushing-sim f32: bit for bit"
 step "M3 (Q16) force trace against bushing-sim f64: within one DAC step"
 ./target/release/bushing-sim compare-trace "$out/host-f64/trace.csv" "$out/m3.log" --within 0.125
 
-step "panic-never link check of the release images (M4F f32, M3 Q16)"
+step "every model and tracker of the core in QEMU (M4F f32, M3 Q16)"
 for target in thumbv7em-none-eabihf thumbv7m-none-eabi; do
-    cargo build -q --release -p bushing-boards --target "$target" --bin rig-loop \
-        --features panic-never
-    echo "$target: links with panic-never, no panicking branch"
+    log="$out/every-model-$target.log"
+    cargo run -q --release -p bushing-boards --target "$target" --bin every-model >"$log" \
+        || { grep -Ev 'faults=0x0 not_finite=0$' "$log" | tail -n 20; exit 1; }
+    grep -E '^(every-model|models|memory|verdict)' "$log"
+done
+
+step "panic-never link check of the release images (rig loop, every model; M4F f32, M3 Q16)"
+for target in thumbv7em-none-eabihf thumbv7m-none-eabi; do
+    for bin in rig-loop every-model; do
+        cargo build -q --release -p bushing-boards --target "$target" --bin "$bin" \
+            --features panic-never
+        echo "$target $bin: links with panic-never, no panicking branch"
+    done
 done
 if cargo build -q --release -p bushing-boards --target thumbv7em-none-eabihf --bin rig-loop \
     --features panic-never,deliberate-panic 2>"$out/deliberate-panic.txt"; then

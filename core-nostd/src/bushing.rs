@@ -114,18 +114,21 @@ pub trait Effect<T: Real> {
     /// Sum of the branch outputs of a report.
     fn total(report: &Self::Report) -> EffectOutput<T>;
 
-    /// Whether every effect of a report has a finite force and tangent
-    /// within [`Real::GUARD`] (a NaN fails). A tuple asks each member.
+    /// `|force| + |tangent|` summed over the effects of a report (a tuple
+    /// adds its members'; NaN or infinite if any is): a bushing step is
+    /// accepted only if this, its total force and its total tangent stay
+    /// within [`Real::GUARD`], so that every effect's force and tangent do.
     #[inline(always)]
-    fn guarded(report: &Self::Report) -> bool {
-        Self::total(report).guarded()
+    fn magnitude(report: &Self::Report) -> T {
+        let t = Self::total(report);
+        t.force.abs() + t.tangent.abs()
     }
 
     /// Advances the state by one step if `accept` takes the report, and
     /// otherwise leaves the state exactly as it was and returns `None`.
-    /// The default steps a copy of the state and commits it (a copy of a
-    /// few words for the banks of the crate); an effect whose state is
-    /// costly to copy may override it.
+    /// The default keeps a copy of the state and puts it back if the step
+    /// is refused (a few words for the banks of the crate, which the step
+    /// loads anyway); an effect whose state is costly to copy overrides it.
     #[inline(always)]
     fn step_if(
         &self,
@@ -133,12 +136,12 @@ pub trait Effect<T: Real> {
         drive: &Drive<T>,
         accept: impl FnOnce(&Self::Report) -> bool,
     ) -> Option<Self::Report> {
-        let mut next = state.clone();
-        let report = self.step(&mut next, drive);
+        let before = state.clone();
+        let report = self.step(state, drive);
         if accept(&report) {
-            *state = next;
             Some(report)
         } else {
+            *state = before;
             None
         }
     }
@@ -197,8 +200,20 @@ impl<T: Real, E: Effect<T>> Effect<T> for Option<E> {
         report.as_ref().map_or(EffectOutput::zero(), E::total)
     }
     #[inline(always)]
-    fn guarded(report: &Self::Report) -> bool {
-        report.as_ref().is_none_or(E::guarded)
+    fn magnitude(report: &Self::Report) -> T {
+        report.as_ref().map_or(T::ZERO, E::magnitude)
+    }
+    #[inline(always)]
+    fn step_if(
+        &self,
+        state: &mut Self::State,
+        drive: &Drive<T>,
+        accept: impl FnOnce(&Self::Report) -> bool,
+    ) -> Option<Self::Report> {
+        match (self, state) {
+            (Some(e), Some(s)) => e.step_if(s, drive, |r| accept(&Some(*r))).map(Some),
+            _ => accept(&None).then_some(None),
+        }
     }
 }
 
@@ -210,8 +225,31 @@ fn same_dt(a: Option<f64>, b: Option<f64>) -> Result<Option<f64>, ParamError> {
     }
 }
 
+/// The all-or-nothing step of a tuple: each member's `step_if` decides
+/// inside the previous member's, so the innermost call sees every report
+/// and asks `accept` once; each member commits only if every member after
+/// it did, and each pays only its own rollback (none for the members with
+/// a native `step_if`).
+macro_rules! nested_step_if {
+    ($s:ident, $st:ident, $d:ident, $accept:ident, $out:ident, [$($done:ident)*];) => {{
+        let report = ($(*$done,)*);
+        let ok = $accept(&report);
+        if ok {
+            $out = Some(report);
+        }
+        ok
+    }};
+    ($s:ident, $st:ident, $d:ident, $accept:ident, $out:ident, [$($done:ident)*]; $idx:tt $r:ident $($rest:tt)*) => {
+        $s.$idx
+            .step_if(&mut $st.$idx, $d, |$r| {
+                nested_step_if!($s, $st, $d, $accept, $out, [$($done)* $r]; $($rest)*)
+            })
+            .is_some()
+    };
+}
+
 macro_rules! tuple_effect {
-    ($($name:ident $idx:tt),+) => {
+    ($($name:ident $idx:tt $r:ident),+) => {
         impl<T: Real, $($name: Effect<T>),+> Effect<T> for ($($name,)+) {
             type State = ($($name::State,)+);
             type Report = ($($name::Report,)+);
@@ -237,19 +275,32 @@ macro_rules! tuple_effect {
                 EffectOutput::zero() $(.plus($name::total(&report.$idx)))+
             }
             #[inline(always)]
-            fn guarded(report: &Self::Report) -> bool {
-                true $(&& $name::guarded(&report.$idx))+
+            fn magnitude(report: &Self::Report) -> T {
+                T::ZERO $(+ $name::magnitude(&report.$idx))+
+            }
+            #[inline(always)]
+            fn step_if(
+                &self,
+                state: &mut Self::State,
+                drive: &Drive<T>,
+                accept: impl FnOnce(&Self::Report) -> bool,
+            ) -> Option<Self::Report> {
+                let mut out = None;
+                // `out` is set exactly when every member accepted.
+                let _accepted: bool =
+                    nested_step_if!(self, state, drive, accept, out, []; $($idx $r)+);
+                out
             }
         }
     };
 }
 
-tuple_effect!(A 0);
-tuple_effect!(A 0, B 1);
-tuple_effect!(A 0, B 1, C 2);
-tuple_effect!(A 0, B 1, C 2, D 3);
-tuple_effect!(A 0, B 1, C 2, D 3, E 4);
-tuple_effect!(A 0, B 1, C 2, D 3, E 4, F 5);
+tuple_effect!(A 0 ra);
+tuple_effect!(A 0 ra, B 1 rb);
+tuple_effect!(A 0 ra, B 1 rb, C 2 rc);
+tuple_effect!(A 0 ra, B 1 rb, C 2 rc, D 3 rd);
+tuple_effect!(A 0 ra, B 1 rb, C 2 rc, D 3 rd, E 4 re);
+tuple_effect!(A 0 ra, B 1 rb, C 2 rc, D 3 rd, E 4 re, F 5 rf);
 
 /// State of a [`Bushing`]: the last accepted input, backbone force and
 /// output, the effects' states, and the fault flags.
@@ -413,11 +464,14 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
         };
         let elastic = self.g0 * f_inf;
         let elastic_tangent = self.g0 * k_inf;
-        // The effects' new state is committed only if every effect's force
-        // and tangent, and the totals, stay finite and within the guard.
+        // The effects' new state is committed only if the effects' forces
+        // and tangents (their summed magnitudes, so each of them), the total
+        // force and the total tangent stay finite and within the guard.
         let accept = |r: &E::Report| {
             let t = E::total(r);
-            E::guarded(r) && within(elastic + t.force) && within(elastic_tangent + t.tangent)
+            within(E::magnitude(r))
+                & within(elastic + t.force)
+                & within(elastic_tangent + t.tangent)
         };
         let Some(report) = self.effects.step_if(&mut state.effects, &drive, accept) else {
             return refuse(state, self.g0, Faults::FORCE_OUT_OF_RANGE);
@@ -552,6 +606,43 @@ mod tests {
         let out = b.step(&mut s, -2.7e38);
         assert!(out.effects.is_none() && out.force.is_finite());
         assert!(s.faults().contains(Faults::OUT_OF_RANGE));
+    }
+
+    #[test]
+    fn a_step_beyond_the_guard_is_refused_whole_in_any_composition() {
+        // A stiff K_f table (1e15 N/mm) beside a Maxwell bank and an absent
+        // effect: at 2000 mm the table's force, 2e18 N, leaves f32's guard.
+        // Every member keeps its state, including the stack's turning
+        // points, on a stack with room and on a full one.
+        use crate::FirstLoading;
+        use crate::stack::{KfTable, TurningPoints};
+        let soft = Polynomial::<f32, 2>::linear(1.0).unwrap();
+        let table = KfTable::<f32, 1>::new(&[0.0], &[1e15]).unwrap();
+        let stack = TurningPoints::<_, 4>::new(table, FirstLoading::Masing);
+        let specs = [MaxwellSpec::new(2.0, 0.2)];
+        let bank = MaxwellBank::<f32, 1>::new(MaxwellForm::RateExactRamp, &specs, 1e-3).unwrap();
+        let b = Bushing::new(soft, (bank, None::<MaxwellBank<f32, 1>>, stack)).unwrap();
+        let mut s = b.state_at(0.0);
+        let mut full = false;
+        for (k, x) in [0.5f32, -0.45, 0.4, -0.35, 0.3, -0.25, 0.2]
+            .into_iter()
+            .enumerate()
+        {
+            b.step(&mut s, x);
+            full |= s.effects().2.depth() == 4;
+            let before = s.clone();
+            let out = b.step(&mut s, 2000.0);
+            assert!(out.effects.is_none() && out.force == before.force(), "{k}");
+            assert!(s.faults().contains(Faults::FORCE_OUT_OF_RANGE));
+            s.clear_faults();
+            assert_eq!(
+                s, before,
+                "a refused step changed the state ({k} reversals)"
+            );
+            assert!(b.step(&mut s, 1.0).effects.is_some());
+            s = before;
+        }
+        assert!(full, "the stack was never full");
     }
 
     #[test]

@@ -210,6 +210,7 @@ impl fmt::Display for ParamError {
                 max,
             } => {
                 let open = if min_open { "(" } else { "[" };
+                let (value, min, max) = (Num(value), Num(min), Num(max));
                 write!(f, "{param} = {value} is outside {open}{min}, {max}]")
             }
             Self::TimeStepMismatch { first, other } => write!(
@@ -221,6 +222,21 @@ impl fmt::Display for ParamError {
 }
 
 impl core::error::Error for ParamError {}
+
+/// A number as a person reads it: plain from 1e-4 to 1e9, in exponent form
+/// beyond (a guard of 2^500 is `3.273390607896142e150`, not 151 digits).
+struct Num(f64);
+
+impl fmt::Display for Num {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let a = self.0.abs();
+        if a == 0.0 || !a.is_finite() || (1e-4..1e9).contains(&a) {
+            write!(f, "{}", self.0)
+        } else {
+            write!(f, "{:e}", self.0)
+        }
+    }
+}
 
 /// Checks that `value` is finite and strictly positive.
 pub(crate) fn positive(param: Param, value: f64) -> Result<f64, ParamError> {

@@ -490,6 +490,41 @@ impl<T: Real, R: Relaxation<T>, const M: usize> Effect<T> for TurningPoints<R, M
     fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
         *report
     }
+
+    /// A step changes the scalars and at most the slot above the top
+    /// (a reversal's push) while the stack has room: only those are kept
+    /// for a refusal. A full stack shifts on a push, so the whole state is.
+    #[inline]
+    fn step_if(
+        &self,
+        st: &mut StackState<T, M>,
+        drive: &Drive<T>,
+        accept: impl FnOnce(&EffectOutput<T>) -> bool,
+    ) -> Option<EffectOutput<T>> {
+        if st.len >= M {
+            let before = *st;
+            let report = self.step(st, drive);
+            return if accept(&report) {
+                Some(report)
+            } else {
+                *st = before;
+                None
+            };
+        }
+        let slot = st.len;
+        let kept = (st.points.get(slot).copied(), st.len, st.dir, st.x);
+        let kept_output = (st.force, st.slope, st.work);
+        let report = self.step(st, drive);
+        if accept(&report) {
+            return Some(report);
+        }
+        if let (Some(p), Some(q)) = (st.points.get_mut(slot), kept.0) {
+            *p = q;
+        }
+        (st.len, st.dir, st.x) = (kept.1, kept.2, kept.3);
+        (st.force, st.slope, st.work) = kept_output;
+        None
+    }
 }
 
 /// Pushes a turning point, dropping the two oldest when full.
@@ -646,6 +681,13 @@ mod tests {
             Sts::<f64>::new(0.0, 1.0),
             Err(ParamError::NotPositive { .. })
         ));
+        // Finite in f64, beyond the working type's guard: refused there.
+        let huge = KfTable::<f32, 2>::new(&[0.0, 1.0], &[1e39, 0.0]);
+        assert!(
+            matches!(huge, Err(ParamError::OutOfRange { param, .. }) if param == Param::item("k", 0)),
+            "{huge:?}"
+        );
+        assert!(KfTable::<f64, 2>::new(&[0.0, 1.0], &[1e39, 0.0]).is_ok());
     }
 
     /// Energy over the steady inner loop between `lo` and `hi` after the

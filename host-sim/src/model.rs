@@ -393,7 +393,7 @@ impl<T: Real> EffectList<T> {
         keep: bool,
     ) -> (EffectOutput<T>, bool) {
         let mut total = EffectOutput::zero();
-        let mut guarded = true;
+        let mut magnitude = T::ZERO;
         for (e, slot) in self.effects.iter().zip(state.iter_mut()) {
             if keep {
                 slot.before.0.copy_from(&slot.state);
@@ -401,12 +401,12 @@ impl<T: Real> EffectList<T> {
             }
             let out = e.step(&mut slot.state, drive);
             slot.last = out;
-            guarded &= out.guarded();
+            magnitude += out.force.abs() + out.tangent.abs();
             total.force += out.force;
             total.tangent += out.tangent;
             total.dissipated += out.dissipated;
         }
-        (total, guarded)
+        (total, magnitude <= T::GUARD)
     }
 }
 
