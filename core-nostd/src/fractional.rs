@@ -286,6 +286,28 @@ impl<T: Real, const N: usize> Effect<T> for Grunwald<T, N> {
     fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
         *report
     }
+
+    /// A step writes one slot of the ring, the head and the force: only
+    /// those are kept for a refusal (the ring is N words).
+    #[inline]
+    fn step_if(
+        &self,
+        st: &mut Self::State,
+        drive: &Drive<T>,
+        accept: impl FnOnce(&EffectOutput<T>) -> bool,
+    ) -> Option<EffectOutput<T>> {
+        let (head, force) = (st.head, st.force);
+        let slot = st.history.get(head.min(N)).copied();
+        let report = self.step(st, drive);
+        if accept(&report) {
+            return Some(report);
+        }
+        if let (Some(p), Some(u)) = (st.history.get_mut(head.min(N)), slot) {
+            *p = u;
+        }
+        (st.head, st.force) = (head, force);
+        None
+    }
 }
 
 #[cfg(test)]
