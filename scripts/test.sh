@@ -89,6 +89,7 @@ step "accuracy-cost report, quick mode (kernel-cost and kalman-peers in QEMU)"
 
 step "host tests"
 cargo test
+cargo test --release -p bushing-tests --test long_run -- --nocapture
 cargo test -p bushing-boards --lib
 
 step "rig-loop firmware in QEMU against bushing-sim, panic-never link check"
