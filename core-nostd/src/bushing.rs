@@ -11,7 +11,7 @@
 //! not in the type costs no instruction and no byte.
 
 use crate::backbone::Backbone;
-use crate::error::{Faults, ParamError};
+use crate::error::{Faults, Param, ParamError};
 use crate::real::Real;
 
 /// What every effect sees in a step: the new displacement and the backbone
@@ -382,10 +382,28 @@ pub struct Bushing<T, B, E> {
 }
 
 impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
-    /// Joins a backbone and effects; refuses fractions above one and effects
-    /// built for different time steps.
+    /// Joins a backbone and effects; refuses fractions above one, effects
+    /// built for different time steps, and a backbone whose force or
+    /// tangent at x = 0, the point a state falls back to after a refused
+    /// start, is not finite or exceeds [`Real::GUARD`] in the working type.
     pub fn new(backbone: B, effects: E) -> Result<Self, ParamError> {
         effects.check_dt(None)?;
+        let (f0, k0) = backbone.eval(T::ZERO);
+        for (name, v) in [
+            ("backbone force at x = 0", f0),
+            ("backbone tangent at x = 0", k0),
+        ] {
+            if !within(v) {
+                let max = T::GUARD.to_f64();
+                return Err(ParamError::OutOfRange {
+                    param: Param::scalar(name),
+                    value: v.to_f64(),
+                    min: -max,
+                    min_open: false,
+                    max,
+                });
+            }
+        }
         let sum = effects.fraction();
         // One part in 1e12 of slack for fractions entered as decimals.
         if sum.is_nan() || sum > 1.0 + 1e-12 {
@@ -643,6 +661,20 @@ mod tests {
             s = before;
         }
         assert!(full, "the stack was never full");
+    }
+
+    #[test]
+    fn a_backbone_beyond_the_guard_at_rest_is_refused() {
+        // Finite in f32, 1e30 N at x = 0: a state that falls back to x = 0
+        // after a refused start would hold it (and a 6-DOF bushing's arms
+        // would turn it into infinite moments). Found by the six_dof fuzzer.
+        let far = Polynomial::<f32, 2>::new(&[1e30, 100.0], (-1.0, 1.0)).unwrap();
+        assert!(matches!(
+            Bushing::new(far, ()),
+            Err(ParamError::OutOfRange { param, .. }) if param == Param::scalar("backbone force at x = 0")
+        ));
+        let fine = Polynomial::<f32, 2>::new(&[1e17, 100.0], (-1.0, 1.0)).unwrap();
+        assert!(Bushing::new(fine, ()).is_ok());
     }
 
     #[test]

@@ -206,6 +206,8 @@ pub struct MicromathExp;
 impl MicromathExp {
     /// Below this h, `1 - e^-h` is taken from its series.
     pub const SERIES_BELOW: f32 = 0.0625;
+    /// ln of the largest f32: `exp` is infinite from here on.
+    pub const LN_MAX: f32 = 88.722_84;
 }
 
 #[cfg(feature = "micromath")]
@@ -213,6 +215,12 @@ impl Exponentials<f32> for MicromathExp {
     const NAME: &'static str = "micromath";
     #[inline(always)]
     fn exp(x: f32) -> f32 {
+        // micromath 2.1 lets the exponent 128 through for x in [88.72,
+        // 89.42) (a debug assertion there, NaN in release): above ln of the
+        // largest f32 the answer is infinite anyway, and a NaN stays NaN.
+        if !(x < Self::LN_MAX) {
+            return if x.is_nan() { x } else { f32::INFINITY };
+        }
         // By path: on a host with std, `x.exp()` would be std's inherent
         // method, not micromath's.
         micromath::F32Ext::exp(x)
@@ -231,6 +239,33 @@ impl Exponentials<f32> for MicromathExp {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[cfg(feature = "micromath")]
+    #[test]
+    fn micromath_exp_is_total_over_f32() {
+        // Every argument from -200 to 200 in steps of 1/64, the edges and
+        // NaN: no panic (micromath's exponent check fires in debug builds
+        // between 88.72 and 89.42), infinite past ln(f32::MAX), finite and
+        // within micromath's 2.4e-3 below it.
+        for k in -12_800..=12_800 {
+            let x = k as f32 / 64.0;
+            let e = MicromathExp::exp(x);
+            if x >= MicromathExp::LN_MAX {
+                assert_eq!(e, f32::INFINITY, "{x}");
+            } else if x > -80.0 {
+                let exact = libm::exp(x as f64);
+                assert!(
+                    (e as f64 / exact - 1.0).abs() < 2.5e-3,
+                    "{x}: {e} vs {exact}"
+                );
+            } else {
+                assert!(e.is_finite() && e >= 0.0, "{x}: {e}");
+            }
+        }
+        assert!(MicromathExp::exp(f32::NAN).is_nan());
+        assert_eq!(MicromathExp::exp(f32::INFINITY), f32::INFINITY);
+        assert!(MicromathExp::exp(f32::NEG_INFINITY).abs() < 1e-30);
+    }
 
     #[test]
     fn exponential_providers_keep_slow_decays() {

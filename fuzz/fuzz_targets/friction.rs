@@ -1,0 +1,5 @@
+//! The `Friction` family of `bushing_fuzz` alone.
+#![no_main]
+
+use bushing_fuzz::Family;
+libfuzzer_sys::fuzz_target!(|data: &[u8]| bushing_fuzz::run(Family::Friction, data));
