@@ -145,20 +145,51 @@ Beside the named cases:
   (`cargo test --release -p bushing-tests --test long_run -- --nocapture`), and the
   10^8-step run is
   `cargo test --release -p bushing-tests --test long_run -- --ignored --nocapture`.
-- `fuzz/` (cargo-fuzz, libFuzzer): `scene_parser` feeds any bytes to the scene parser and
-  steps what parses; `step_models` builds every model of the core from arbitrary
-  parameters (any bit pattern) and steps it over arbitrary inputs, checking that a
-  refused input keeps the force and an accepted one gives finite outputs. With
-  `cargo install cargo-fuzz` (the stable toolchain accepts its flags with
-  `RUSTC_BOOTSTRAP=1`):
-  `RUSTC_BOOTSTRAP=1 cargo fuzz run --sanitizer none step_models -- -max_total_time=600`.
-  Its first minutes found parameters valid in f64 that leave f32 (a backbone tangent
-  that rounds to zero, a cell's ω·dt or energy coefficient that overflows, a reciprocal
-  that overflows); they are now refused at construction (`OutOfRange`, `NotFinite`) or,
-  for the tangent, at the step (`Faults::OUT_OF_RANGE`), each with a unit test.
-- The rig-loop firmware (`docs/firmware.md`, `./scripts/rig-loop.sh`, in CI): both
-  release images, M4F in f32 and M3 in Q16, link with `panic-never` as their panic
-  handler, so no panicking branch is left; adding a bounds-checked index to the
+- `fuzz/` (cargo-fuzz, libFuzzer; a workspace of its own): `scene_parser` feeds any bytes to
+  the scene parser and steps what parses. The models are fuzzed by family, one target per
+  family, from the library `fuzz/src/` (one module per family, generic over the working type;
+  f32, and f64 for one input in eight): `backbone` (polynomials, linear, monotone splines),
+  `maxwell` (every form with each state storage, each cell, re-tuned while running: shifted,
+  retune with libm or micromath, WLF and Arrhenius shift factors), `fractional` (Grünwald of
+  0 to 64 taps), `iwan` (clamp and slider banks, cells given, from slip distances or
+  discretised: STS or K_f table to Iwan, Segalman, uniform or logarithmic), `xf` (both forms),
+  `stack` (STS and K_f table on turning-point stacks of 2 to 64 points, both first loadings),
+  `friction` (Dahl, Bouc-Wen, Berg), `viscous` (dashpot alone, beside a Maxwell or an Iwan
+  bank), `oscillator` (Iwan, Maxwell and friction restoring forces, arbitrary forces or a
+  sweep), `six_dof` (six non-linear laws, both connectivities, step and 12x12 tangent),
+  `tracker` (modal EKF and UKF with each sensor kind, one or two modes and sensors, fitted
+  start values, sine and modulus trackers, relevance check, unscented transform) and
+  `fixed_point` (every family above in Q16 and Q32); `step_models` picks any family.
+  Parameters are mostly plausible and sometimes any bit pattern, inputs any value of the
+  working type. Construction must end in a model or a typed error and no step may panic; a
+  refused bushing step keeps the force bit for bit, and an accepted one gives a finite force,
+  tangent and dissipated energy, the force and tangent (the bushing's and each effect's)
+  within `Real::GUARD`; a 6-DOF configuration refused keeps its loads and has no tangent, an
+  accepted one gives finite loads and a tangent without a non-finite entry; the trackers'
+  states stay finite. With `cargo install cargo-fuzz` (the stable toolchain accepts its flags
+  with `RUSTC_BOOTSTRAP=1`), one family for 10 minutes:
+  `RUSTC_BOOTSTRAP=1 cargo fuzz run --sanitizer none <family> -- -max_total_time=600`;
+  every family in turn, 600 s each unless told, printing the runs and the result of each and
+  failing if any target fails: `scripts/fuzz-families.sh [SECONDS] [FAMILY...]`.
+  What the targets found, each now refused or fixed with a unit test:
+  - parameters valid in f64 that leave f32 (a backbone tangent that rounds to zero, a cell's
+    ω·dt or energy coefficient that overflows, a reciprocal that overflows): refused at
+    construction (`OutOfRange`, `NotFinite`) or, for the tangent, at the step;
+  - a K_f table whose stored values leave f32 (NaN or 9e18 N forces on accepted steps):
+    refused at construction, and every effect's force and tangent guarded at the step;
+  - micromath's `exp` panicking in debug builds for arguments in [88.72, 89.42);
+  - a backbone whose force at x = 0 is beyond the guard, which a state falls back to after a
+    refused start (infinite 6-DOF moments): refused at construction;
+  - a finite external force that overflowed the oscillator's velocity;
+  - the relevance check returning NaN or infinite curves with `Ok` for frequencies or
+    amplitudes beyond 1e±154;
+  - the sine and modulus trackers storing an infinite state after samples near f32::MAX,
+    and a subnormal dt overflowing the rotation angle.
+- The rig-loop firmware and `every-model` (`docs/firmware.md`, `./scripts/rig-loop.sh`, in
+  CI): the release images of both, M4F in f32 and M3 in Q16, link with `panic-never` as
+  their panic handler, so no panicking branch is left in the rig loop nor in any public
+  model or tracker of the core (`every-model` builds and steps each one from black-boxed
+  parameters, and runs in QEMU on both cores); adding a bounds-checked index to the
   interrupt (`--features panic-never,deliberate-panic`) makes the link fail with
   `error(panic-never): your program contains at least one panicking branch`. The same
   firmware measures its stack high-water mark by painting the free RAM in QEMU and
