@@ -17,10 +17,17 @@
 //!
 //! The modal tracker uses it to generate the free decays and forced
 //! responses it is tested against.
+//!
+//! As every model of the crate, a step never poisons its state: an external
+//! force that is not finite or is beyond [`Real::GUARD`], a displacement the
+//! restoring force refuses, or a velocity or acceleration that would leave
+//! the guard makes the step refused, the state kept and a fault flag raised;
+//! a time step whose Newmark coefficients would round to zero or overflow in
+//! the working type is refused at construction (see [`Oscillator`]).
 
 use crate::backbone::Backbone;
 use crate::bushing::{Bushing, BushingState, Effect};
-use crate::error::{Faults, Param, ParamError, positive};
+use crate::error::{Faults, Param, ParamError, guarded, positive};
 use crate::real::Real;
 
 /// Fixed-step integrator of `p'' + r(p) = f` with unit mass.
@@ -49,8 +56,30 @@ use crate::real::Real;
 ///   outside that (a strongly hardening backbone at a coarse step) the step
 ///   reports `converged = false` after the iteration limit and commits the
 ///   last iterate.
+/// - Time step: [`Oscillator::new`] keeps the step coefficients `h`,
+///   `h/2` and `β = h²/4` positive and within [`Real::GUARD`] in the
+///   working type: `β` from the smallest power of four the type holds to
+///   `GUARD`, i.e. `dt` from `2^-73` (about 1.1e-22) to `2^31` in `f32`,
+///   from `2^-536` to `2^251` in `f64` (and from `2^-7` to `2^8` in `Q16`,
+///   where `β` is below the resolution at any control rate). It also keeps
+///   `β K_0 <= GUARD`, so that the chord slope `1 / (1 + β K_0)` does not
+///   round to zero. Anything else is refused with a typed [`ParamError`]
+///   naming `dt` and the bound.
+/// - Refused steps: the external force must be finite and within
+///   [`Real::GUARD`] ([`Faults::NON_FINITE_INPUT`], [`Faults::OUT_OF_RANGE`]
+///   otherwise); the restoring force must accept the converged
+///   displacement (so `p_{n+1}` and `r(p_{n+1})` are finite and within the
+///   guard; [`Faults::OUT_OF_RANGE`] otherwise); and the new `v` and `a`
+///   must be finite and within the guard ([`Faults::FORCE_OUT_OF_RANGE`]
+///   otherwise: two accelerations near the guard added over a coarse step).
+///   A refused step keeps the state bit for bit, returns the last `p`, `v`,
+///   `a` and restoring force with no work, no dissipation, no iteration and
+///   `converged = false`, and raises the flag in the oscillator's state.
+///   Every accepted state thus holds `p`, `v`, `a`, `f` and `r` within the
+///   guard, where no product the step forms overflows.
 /// - Cost: one bushing trial per iteration, plus one to seed it; at
-///   `K_0 h² < 1e-3` the iteration stops after two or three.
+///   `K_0 h² < 1e-3` the iteration stops after two or three. The guards
+///   cost three comparisons per step (on `f`, `a` and `v`), no division.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Oscillator<T, B, E> {
     restoring: Bushing<T, B, E>,
@@ -96,8 +125,8 @@ impl<T: Real, S> OscillatorState<T, S> {
     pub fn restoring(&self) -> &BushingState<T, S> {
         &self.restoring
     }
-    /// Fault flags raised since the state was made: refused forces, and the
-    /// restoring force's own flags.
+    /// Fault flags raised since the state was made: refused starts and
+    /// steps (see [`Oscillator`]), and the restoring force's own flags.
     pub fn faults(&self) -> Faults {
         let mut all = self.faults;
         all.raise(self.restoring.faults());
@@ -123,8 +152,10 @@ pub struct OscillatorStep<T> {
     pub work: T,
     /// Chord iterations taken.
     pub iterations: u32,
-    /// Whether the iteration met its tolerance. A refused step (non-finite
-    /// force, restoring force out of range) reports `false`.
+    /// Whether the iteration met its tolerance. A refused step (external
+    /// force not finite or beyond the guard, restoring force out of range,
+    /// new velocity or acceleration beyond the guard) reports `false`, with
+    /// no iteration.
     pub converged: bool,
 }
 
@@ -133,10 +164,26 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Oscillator<T, B, E> {
     pub const DEFAULT_MAX_ITERATIONS: u32 = 32;
 
     /// An oscillator of time step `dt` with the restoring force `restoring`.
-    /// Refuses a non-positive `dt`, and one different from the step the
-    /// restoring force's effects were built for.
+    /// Refuses a non-positive `dt`; a `dt` whose coefficients `h/2` or
+    /// `β = dt²/4` would round to zero in the working type, or `β` exceed
+    /// [`Real::GUARD`] ([`ParamError::OutOfRange`] on `dt`, from `2^-73` to
+    /// `2^31` in `f32`: see [`Oscillator`]); one different from the step the
+    /// restoring force's effects were built for; and one where
+    /// `dt² K_0 / 4` exceeds [`Real::GUARD`] (in fixed point the chord
+    /// slope `1 / (1 + dt² K_0 / 4)` would round to zero).
     pub fn new(restoring: Bushing<T, B, E>, dt: f64) -> Result<Self, ParamError> {
-        let dt = positive(Param::scalar("dt"), dt)?;
+        let param = Param::scalar("dt");
+        let dt = positive(param, dt)?;
+        let (min, max) = dt_range::<T>();
+        if !(min..=max).contains(&dt) {
+            return Err(ParamError::OutOfRange {
+                param,
+                value: dt,
+                min,
+                min_open: false,
+                max,
+            });
+        }
         if let Some(built) = restoring.effects().check_dt(None)?
             && (built - dt).abs() > 1e-12 * dt
         {
@@ -150,6 +197,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Oscillator<T, B, E> {
         let k0 = probe.tangent.to_f64();
         let k0 = if k0.is_finite() { k0.max(0.0) } else { 0.0 };
         let beta = 0.25 * dt * dt;
+        guarded::<T>(Param::scalar("dt^2 K_0 / 4"), beta * k0)?;
         Ok(Self {
             restoring,
             dt,
@@ -187,24 +235,39 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Oscillator<T, B, E> {
 
     /// A state at displacement `p0` and velocity `v0` under the external
     /// force `f0`, with the restoring force relaxed at `p0` (all hysteretic
-    /// branches unloaded), so `a0 = f0 - r(p0)`. Non-finite inputs are
-    /// replaced by zero and flagged.
+    /// branches unloaded), so `a0 = f0 - r(p0)`. An input that is not
+    /// finite, or beyond [`Real::GUARD`], is replaced by zero and flagged
+    /// ([`Faults::NON_FINITE_INPUT`], [`Faults::OUT_OF_RANGE`]); so is a
+    /// force `f0` whose `a0` would leave the guard ([`Faults::OUT_OF_RANGE`]),
+    /// and a `p0` the restoring force refuses (its own flag). The state
+    /// holds `p`, `v`, `a`, `f` and `r` within the guard, as every step
+    /// keeps it.
     pub fn state_at(&self, p0: T, v0: T, f0: T) -> OscillatorState<T, E::State> {
         let mut faults = Faults::NONE;
         let mut clean = |v: T| {
-            if v.is_finite() {
+            if within(v) {
                 v
             } else {
-                faults.raise(Faults::NON_FINITE_INPUT);
+                faults.raise(if v.is_finite() {
+                    Faults::OUT_OF_RANGE
+                } else {
+                    Faults::NON_FINITE_INPUT
+                });
                 T::ZERO
             }
         };
-        let (p0, v0, f0) = (clean(p0), clean(v0), clean(f0));
+        let (p0, v0, mut f0) = (clean(p0), clean(v0), clean(f0));
         let restoring = self.restoring.state_at(p0);
+        let mut a0 = f0 - restoring.force();
+        if !within(a0) {
+            faults.raise(Faults::OUT_OF_RANGE);
+            f0 = T::ZERO;
+            a0 = -restoring.force();
+        }
         OscillatorState {
             p: restoring.x(),
             v: v0,
-            a: f0 - restoring.force(),
+            a: a0,
             f: f0,
             restoring,
             faults,
@@ -212,40 +275,52 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Oscillator<T, B, E> {
     }
 
     /// Advances `state` by one step under the external force `f` (the value
-    /// at the end of the step).
+    /// at the end of the step). A step that cannot be taken (see
+    /// [`Oscillator`]) is refused: the state is kept, a flag raised and the
+    /// last values returned.
     pub fn step(&self, state: &mut OscillatorState<T, E::State>, f: T) -> OscillatorStep<T> {
-        if !f.is_finite() {
-            state.faults.raise(Faults::NON_FINITE_INPUT);
-            return refused(state);
+        if !within(f) {
+            let why = if f.is_finite() {
+                Faults::OUT_OF_RANGE
+            } else {
+                Faults::NON_FINITE_INPUT
+            };
+            return refuse(state, why);
         }
         let predicted = state.p + self.h * state.v + self.beta * state.a;
         let mut a = state.a;
+        let mut p = predicted + self.beta * a;
         // Each chord iteration steps a scratch copy of the committed state
         // (one copy per iteration, none returned).
         let mut next = state.restoring.clone();
-        let mut out = self.restoring.step(&mut next, predicted + self.beta * a);
+        let mut out = self.restoring.step(&mut next, p);
         let mut iterations = 0;
         let mut converged = false;
         while iterations < self.max_iterations {
             iterations += 1;
             let correction = (a + out.force - f) * self.inv_slope;
             a -= correction;
+            p = predicted + self.beta * a;
             next.clone_from(&state.restoring);
-            out = self.restoring.step(&mut next, predicted + self.beta * a);
+            out = self.restoring.step(&mut next, p);
             let scale = a.abs() + f.abs() + out.force.abs();
             if correction.abs() <= self.tolerance * scale {
                 converged = true;
                 break;
             }
         }
-        if out.effects.is_none() || !a.is_finite() {
+        if out.effects.is_none() {
             // The restoring force refused the displacement (out of range):
             // keep the state, flag it.
-            state.faults.raise(Faults::OUT_OF_RANGE);
-            return refused(state);
+            return refuse(state, Faults::OUT_OF_RANGE);
         }
-        let p = predicted + self.beta * a;
+        // The restoring force accepted `p`, so `p` and its force are finite
+        // and within the guard; the acceleration and the velocity are
+        // checked here (each of |a_n|, |a_{n+1}| up to the guard, times h/2).
         let v = state.v + self.half_h * (state.a + a);
+        if !within(a) | !within(v) {
+            return refuse(state, Faults::FORCE_OUT_OF_RANGE);
+        }
         let work = T::HALF * (state.f + f) * (p - state.p);
         state.p = p;
         state.v = v;
@@ -265,8 +340,35 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Oscillator<T, B, E> {
     }
 }
 
+/// The time steps [`Oscillator::new`] accepts in the working type,
+/// `(min, max)`, both included: `β = dt²/4` from the smallest power of four
+/// the type holds exactly (so that neither `β` nor `h/2` rounds to zero) to
+/// [`Real::GUARD`]. `(2^-73, 2^31)` in `f32`, `(2^-536, 2^251)` in `f64`.
+fn dt_range<T: Real>() -> (f64, f64) {
+    // 4^-k and its square root 2^-k, for the largest k whose 4^-k the
+    // working type holds exactly (at most 537 quarterings, in f64).
+    let (mut quarter, mut root) = (1.0f64, 1.0f64);
+    loop {
+        let next = 0.25 * quarter;
+        if !(next > 0.0 && T::from_f64(next).to_f64() == next) {
+            break;
+        }
+        quarter = next;
+        root *= 0.5;
+    }
+    (2.0 * root, 2.0 * libm::sqrt(T::GUARD.to_f64()))
+}
+
+/// Finite and within [`Real::GUARD`] in magnitude (a NaN fails).
+#[inline(always)]
+fn within<T: Real>(v: T) -> bool {
+    v.abs() <= T::GUARD
+}
+
+/// Raises `why` and returns the last values, the state kept.
 #[cold]
-fn refused<T: Real, S>(state: &OscillatorState<T, S>) -> OscillatorStep<T> {
+fn refuse<T: Real, S>(state: &mut OscillatorState<T, S>, why: Faults) -> OscillatorStep<T> {
+    state.faults.raise(why);
     OscillatorStep {
         p: state.p,
         v: state.v,
@@ -292,6 +394,15 @@ mod tests {
 
     fn linear(k: f64) -> Linear {
         Bushing::new(Polynomial::linear(k).unwrap(), ()).unwrap()
+    }
+
+    fn linear_f32(k: f64) -> Bushing<f32, Polynomial<f32, 2>, ()> {
+        Bushing::new(Polynomial::linear(k).unwrap(), ()).unwrap()
+    }
+
+    /// Every value a step returns and keeps, bit for bit.
+    fn kept<S>(s: &OscillatorState<f32, S>) -> [u32; 5] {
+        [s.p, s.v, s.a, s.f, s.restoring.force()].map(f32::to_bits)
     }
 
     /// Seed 004 §4.1: 20 Jenkins cells of stiffness 0.05 slipping from 0.2
@@ -535,5 +646,181 @@ mod tests {
         let nan_start = osc.state_at(f64::NAN, 0.0, 0.0);
         assert_eq!(nan_start.p(), 0.0);
         assert!(nan_start.faults().contains(Faults::NON_FINITE_INPUT));
+    }
+
+    #[test]
+    fn a_finite_force_beyond_the_guard_is_refused_and_the_state_kept() {
+        // The fuzzer's case: f32, dt = 1e-12, a force of -3e38 at the start
+        // and at the step. Two accelerations near f32::MAX used to make
+        // v = -inf, and every later step was refused.
+        let osc = Oscillator::new(linear_f32(100.0), 1e-12).unwrap();
+        let mut s = osc.state_at(0.0, 0.0, -3e38);
+        // The start force is beyond the guard: replaced by zero, flagged.
+        assert!(s.faults().contains(Faults::OUT_OF_RANGE));
+        assert_eq!((s.p(), s.v(), s.a()), (0.0, 0.0, 0.0));
+        let before = kept(&s);
+        let out = osc.step(&mut s, -3e38);
+        assert_eq!((out.iterations, out.converged), (0, false));
+        assert_eq!(
+            (out.p, out.v, out.a, out.force, out.work, out.dissipated),
+            (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        );
+        assert_eq!(kept(&s), before);
+        // From a clean start the step itself raises the flag.
+        let mut s = osc.state_at(0.0, 0.0, 0.0);
+        assert!(s.faults().is_empty());
+        let before = kept(&s);
+        for (f, why) in [
+            (-3e38, Faults::OUT_OF_RANGE),
+            (f32::MAX, Faults::OUT_OF_RANGE),
+            (-1.2e18, Faults::OUT_OF_RANGE), // just beyond 2^60
+            (f32::NEG_INFINITY, Faults::NON_FINITE_INPUT),
+        ] {
+            let out = osc.step(&mut s, f);
+            assert_eq!((out.iterations, out.converged), (0, false), "{f}");
+            assert_eq!(kept(&s), before, "{f}");
+            assert!(s.faults().contains(why), "{f}");
+        }
+        assert!(!s.faults().contains(Faults::FORCE_OUT_OF_RANGE));
+        // The next ordinary step is taken: a = 1 - 100 p with p ~ 2.5e-25,
+        // so v = h/2 (0 + 1) = 5e-13.
+        let out = osc.step(&mut s, 1.0);
+        assert!(out.converged && out.iterations >= 1);
+        assert_eq!(out.a, 1.0);
+        assert_eq!(s.v(), 0.5e-12);
+        assert!(s.p() > 0.0 && s.p() < 1e-24);
+        // And a force at the guard itself is accepted.
+        let out = osc.step(&mut s, -<f32 as Real>::GUARD);
+        assert!(out.iterations >= 1 && out.v.is_finite() && out.v < 0.0);
+    }
+
+    #[test]
+    fn a_velocity_or_acceleration_beyond_the_guard_is_refused() {
+        // f32, k = 1, dt = 1e-3, started at v = 2^60 (the guard). A force
+        // of +2^60 keeps p near 1.2e15 and a near the guard, but
+        // v + h/2 (a_n + a_{n+1}) would pass it by 5.8e14; a force of -2^60
+        // makes a = f - r beyond the guard. Both are refused, the state
+        // kept; a step with no force is then taken.
+        let guard = <f32 as Real>::GUARD;
+        let osc = Oscillator::new(linear_f32(1.0), 1e-3).unwrap();
+        let mut s = osc.state_at(0.0, guard, 0.0);
+        assert!(s.faults().is_empty());
+        let before = kept(&s);
+        for f in [guard, -guard] {
+            let out = osc.step(&mut s, f);
+            assert_eq!((out.iterations, out.converged), (0, false), "{f}");
+            assert_eq!((out.v, out.p), (guard, 0.0));
+            assert_eq!(kept(&s), before, "{f}");
+        }
+        assert!(s.faults().contains(Faults::FORCE_OUT_OF_RANGE));
+        assert!(!s.faults().contains(Faults::OUT_OF_RANGE));
+        let out = osc.step(&mut s, 0.0);
+        assert!(out.converged);
+        assert!(out.v < guard && out.v > 0.99 * guard && out.p > 1e15);
+        assert!(out.a < 0.0 && out.a.abs() <= guard);
+    }
+
+    #[test]
+    fn starts_beyond_the_guard_are_replaced_and_flagged() {
+        let guard = <f64 as Real>::GUARD;
+        let osc = Oscillator::new(linear(1.0), 1e-3).unwrap();
+        // A velocity or a force beyond the guard: zero, flagged.
+        let s = osc.state_at(0.5, 2.0 * guard, 0.0);
+        assert_eq!((s.p(), s.v(), s.a()), (0.5, 0.0, -0.5));
+        assert!(s.faults().contains(Faults::OUT_OF_RANGE));
+        let s = osc.state_at(0.5, 1.0, -2.0 * guard);
+        assert_eq!((s.v(), s.a()), (1.0, -0.5));
+        assert!(s.faults().contains(Faults::OUT_OF_RANGE));
+        let s = osc.state_at(0.5, f64::INFINITY, 0.0);
+        assert_eq!(s.v(), 0.0);
+        assert!(s.faults().contains(Faults::NON_FINITE_INPUT));
+        // Each within the guard, but a0 = f0 - r(p0) = -1.8 guard: the
+        // force is replaced by zero, so a0 = -r(p0).
+        let s = osc.state_at(0.9 * guard, 0.0, -0.9 * guard);
+        assert_eq!((s.p(), s.a()), (0.9 * guard, -0.9 * guard));
+        assert!(s.faults().contains(Faults::OUT_OF_RANGE));
+        // At the guard, accepted as given.
+        let s = osc.state_at(0.0, -guard, guard);
+        assert_eq!((s.v(), s.a()), (-guard, guard));
+        assert!(s.faults().is_empty());
+    }
+
+    #[test]
+    fn time_steps_whose_coefficients_leave_the_working_type_are_refused() {
+        let dt = Param::scalar("dt");
+        // f32: β = dt²/4 from 2^-148 (the smallest power of four f32 holds)
+        // to the guard 2^60, i.e. dt from 2^-73 to 2^31.
+        let (min, max) = (2f64.powi(-73), 2f64.powi(31));
+        assert_eq!(dt_range::<f32>(), (min, max));
+        // dt = 1e-300 makes h, h/2 and β all 0 in f32.
+        assert_eq!(
+            Oscillator::new(linear_f32(100.0), 1e-300).unwrap_err(),
+            ParamError::OutOfRange {
+                param: dt,
+                value: 1e-300,
+                min,
+                min_open: false,
+                max
+            }
+        );
+        for value in [0.99 * min, 1.01 * max, 1e30] {
+            assert_eq!(
+                Oscillator::new(linear_f32(1.0), value).unwrap_err(),
+                ParamError::OutOfRange {
+                    param: dt,
+                    value,
+                    min,
+                    min_open: false,
+                    max
+                }
+            );
+        }
+        // At the bounds: every coefficient positive and finite in f32.
+        let osc = Oscillator::new(linear_f32(1.0), min).unwrap();
+        assert!(osc.beta > 0.0 && osc.half_h > 0.0 && osc.h > 0.0);
+        let osc = Oscillator::new(linear_f32(1.0), max).unwrap();
+        assert_eq!(osc.beta, <f32 as Real>::GUARD);
+        assert!(osc.inv_slope > 0.0);
+        // f64: dt from 2^-536 to 2^251; 1e-300 would make β 0 there too.
+        let (min, max) = (2f64.powi(-536), 2f64.powi(251));
+        assert_eq!(dt_range::<f64>(), (min, max));
+        assert_eq!(
+            Oscillator::new(linear(1.0), 1e-300).unwrap_err(),
+            ParamError::OutOfRange {
+                param: dt,
+                value: 1e-300,
+                min,
+                min_open: false,
+                max
+            }
+        );
+        // The chord slope 1 / (1 + β K_0): β K_0 at most the guard.
+        let k0 = 1e12f32 as f64;
+        assert_eq!(
+            Oscillator::new(linear_f32(1e12), 1e6).unwrap_err(),
+            ParamError::OutOfRange {
+                param: Param::scalar("dt^2 K_0 / 4"),
+                value: 0.25 * 1e6 * 1e6 * k0,
+                min: -<f32 as Real>::GUARD.to_f64(),
+                min_open: false,
+                max: <f32 as Real>::GUARD.to_f64()
+            }
+        );
+        assert!(Oscillator::new(linear_f32(1e12), 1e-3).is_ok());
+    }
+
+    #[cfg(feature = "fixed")]
+    #[test]
+    fn fixed_point_time_steps_keep_beta_above_the_resolution() {
+        use crate::Q16;
+        // Q16: β from 2^-16 (the resolution) to the guard 2^14.
+        assert_eq!(dt_range::<Q16>(), (2f64.powi(-7), 2f64.powi(8)));
+        let b = Bushing::new(Polynomial::<Q16, 2>::linear(1.0).unwrap(), ()).unwrap();
+        assert!(matches!(
+            Oscillator::new(b.clone(), 0.005),
+            Err(ParamError::OutOfRange { .. })
+        ));
+        let osc = Oscillator::new(b, 0.01).unwrap();
+        assert!(osc.beta > Q16::ZERO && osc.inv_slope > Q16::ZERO);
     }
 }

@@ -44,10 +44,23 @@
 //!   dynamics `(I - k H) F` have a pole pair of modulus about `1 - K`
 //!   (`√(1 - k_a)` exactly) turning by about θ per sample, inside
 //!   the unit circle for every accepted tuning. It needs `sin θ ≠ 0`:
-//!   frequencies in (0, Nyquist) only. A non-finite sample, or one that
-//!   would overflow the state, is refused: the estimate is carried to the
+//!   frequencies in (0, Nyquist) only. A non-finite sample, or one whose
+//!   update would take a or b beyond [`Real::GUARD`] in magnitude (2^60 in
+//!   f32, 2^500 in f64), is refused: the estimate is carried to the
 //!   sample's time by the rotation alone (the covariance grows by q), so
-//!   the phase stays right for the next sample.
+//!   the phase stays right for the next sample. The state thus never leaves
+//!   the guard, where the rotation, the update and the squares formed for
+//!   [`SineState::amplitude`] and [`ModulusTracker::modulus`] cannot
+//!   overflow. Should the rotation of a refused sample itself take a or b
+//!   past the guard (only from a state at its edge, whose norm exceeds
+//!   it), the rotated estimate is also halved, exactly: it is then well
+//!   inside, and the next ordinary samples pull it back.
+//! - **Construction**: θ is formed as `2π (f Δt)` and the decay as
+//!   `2π (B Δt)`, which stay finite for any Δt, subnormal included, once f
+//!   is below Nyquist; what would leave a coefficient that is not finite in
+//!   the working type is refused with a [`ParamError`] (a bandwidth whose
+//!   lower bound `K ≥ 1024 ε` is out of reach at a subnormal Δt, a channel
+//!   noise whose square overflows it, a `min_snr σ_X` whose square does).
 //! - **Accuracy**: a clean sine at the tuned frequency is fitted exactly
 //!   (the model holds); on a steady sine, noise of standard deviation σ
 //!   leaves about `σ √K` on each of a and b (tested; the filter's own
@@ -90,7 +103,9 @@ pub struct SineSpec {
 /// One measured channel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Channel {
-    /// Standard deviation of the measurement noise, in the signal's units.
+    /// Standard deviation of the measurement noise, in the signal's units;
+    /// its square must be finite in the working type (in f32, noise below
+    /// 1.8e19).
     pub noise: f64,
     /// Expected amplitude, in the signal's units: the initial standard
     /// deviation of a and b (the start estimate is zero).
@@ -102,7 +117,9 @@ pub struct Channel {
 pub enum Refused {
     /// A sample was NaN or infinite.
     NonFiniteSample,
-    /// The update would have left a non-finite state.
+    /// The update would have taken a or b beyond [`Real::GUARD`] in
+    /// magnitude (a finite sample far larger than the signal, or one whose
+    /// correction overflows): the state is kept within the guard.
     Overflow,
 }
 
@@ -152,14 +169,18 @@ impl<T: Real> Kernel<T> {
         let tau = core::f64::consts::TAU;
         // K = 1 - e^{-2π B dt} <= 1/4, and >= 1024 ε of the working type:
         // a correction below half an ulp of the state is lost, which leaves
-        // a dead band of about ε / (8 K) of the amplitude.
-        let b_max = (0.5 * f).min(libm::log(4.0 / 3.0) / (tau * dt));
+        // a dead band of about ε / (8 K) of the amplitude. Every product
+        // with dt is formed as (rate * dt) or (number / 2π) / dt: 2π f or
+        // 2π B first would overflow near f64::MAX with a subnormal dt, and
+        // 2π dt would lose digits to underflow.
+        let b_max = (0.5 * f).min(libm::log(4.0 / 3.0) / tau / dt);
         let k_min = 1024.0 * T::EPSILON.to_f64();
-        let b_min = -libm::log1p(-k_min) / (tau * dt);
+        let b_min = -libm::log1p(-k_min) / tau / dt;
         let bandwidth = positive(Param::scalar("bandwidth"), spec.bandwidth)?;
         let bandwidth = in_range(Param::scalar("bandwidth"), bandwidth, b_min, false, b_max)?;
-        let k = -libm::expm1(-tau * bandwidth * dt);
-        let theta = tau * f * dt;
+        // B dt <= f dt < 1/2: both products and θ in (0, π) are finite.
+        let k = -libm::expm1(-tau * (bandwidth * dt));
+        let theta = tau * (f * dt);
         // The prior weighs at most 64 ulps of one sample: beyond that the
         // first two samples would be lost to rounding in the covariance.
         let p0 = snr2.min(1.0 / (64.0 * T::EPSILON.to_f64()));
@@ -262,6 +283,17 @@ impl<T: Real> Kernel<T> {
 
     /// One step of `C` channels sharing the covariance: predict, then
     /// update every channel with the same gain. Returns the innovations.
+    ///
+    /// The pairs are within [`Real::GUARD`] on entry (the start state is
+    /// zero) and on return: an update that would leave the guard is
+    /// refused, and the rotation of a refused sample is stored halved if
+    /// it leaves the guard (keeping the old pair instead could lock the
+    /// tracker: a state whose rotation leaves the guard every time, that no
+    /// ordinary sample can pull back in one update). From a guarded state
+    /// nothing here overflows: the rotation keeps the norm (each product in
+    /// it is below 2 GUARD), `z - a` with a finite z rounds to at most the
+    /// largest finite value (GUARD is far below an ulp of it), and a
+    /// correction `k y` that overflows fails the guard.
     fn step<const C: usize>(
         &self,
         pairs: &mut [(T, T); C],
@@ -274,34 +306,47 @@ impl<T: Real> Kernel<T> {
             *p = self.rotate(*p);
         }
         let prior = self.predict(cov);
-        if !samples.iter().all(|z| z.is_finite()) {
-            *pairs = rotated;
-            *cov = prior;
-            counters.refused = counters.refused.saturating_add(1);
-            return Err(Refused::NonFiniteSample);
-        }
-        let (k0, k1) = self.gain(&prior);
-        let mut next = rotated;
-        let mut innovations = [T::ZERO; C];
-        for ((p, z), y) in next.iter_mut().zip(samples).zip(innovations.iter_mut()) {
-            *y = z - p.0;
-            *p = (p.0 + k0 * *y, p.1 + k1 * *y);
-        }
-        let finite = next.iter().all(|p| p.0.is_finite() && p.1.is_finite());
-        if !finite {
-            *pairs = rotated;
-            *cov = prior;
-            counters.refused = counters.refused.saturating_add(1);
-            return Err(Refused::Overflow);
-        }
-        let (post, repaired) = self.joseph(&prior, (k0, k1));
-        if repaired {
-            counters.repairs = counters.repairs.saturating_add(1);
-        }
-        *pairs = next;
-        *cov = post;
-        Ok(innovations)
+        let refused = if samples.iter().all(|z| z.is_finite()) {
+            let (k0, k1) = self.gain(&prior);
+            let mut next = rotated;
+            let mut innovations = [T::ZERO; C];
+            for ((p, z), y) in next.iter_mut().zip(samples).zip(innovations.iter_mut()) {
+                *y = z - p.0;
+                *p = (p.0 + k0 * *y, p.1 + k1 * *y);
+            }
+            if guarded(&next) {
+                let (post, repaired) = self.joseph(&prior, (k0, k1));
+                if repaired {
+                    counters.repairs = counters.repairs.saturating_add(1);
+                }
+                *pairs = next;
+                *cov = post;
+                return Ok(innovations);
+            }
+            Refused::Overflow
+        } else {
+            Refused::NonFiniteSample
+        };
+        *pairs = if guarded(&rotated) {
+            rotated
+        } else {
+            // Beyond the guard by at most √2 (the norm of a guarded pair):
+            // halved, exactly, it is back inside with room to turn.
+            rotated.map(|(a, b)| (a * T::HALF, b * T::HALF))
+        };
+        *cov = prior;
+        counters.refused = counters.refused.saturating_add(1);
+        Err(refused)
     }
+}
+
+/// Every component finite and within [`Real::GUARD`] in magnitude (a NaN
+/// fails): 2 comparisons per channel.
+#[inline(always)]
+fn guarded<T: Real, const C: usize>(pairs: &[(T, T); C]) -> bool {
+    pairs
+        .iter()
+        .all(|&(a, b)| a.abs() <= T::GUARD && b.abs() <= T::GUARD)
 }
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -369,7 +414,7 @@ impl<T: Real> SineTracker<T> {
         let kernel = Kernel::new(dt, spec, sq(amplitude / noise))?;
         Ok(Self {
             kernel,
-            noise2: T::from_f64(noise * noise),
+            noise2: finite_square::<T>("noise", noise)?,
         })
     }
 
@@ -443,6 +488,8 @@ pub struct ModulusSpec {
     /// The modulus is reported only when the displacement amplitude
     /// exceeds this many standard deviations of its estimate (10 keeps the
     /// error from the displacement estimate alone near 10 % at worst).
+    /// `(min_snr σ_X)²`, with σ_X the displacement noise, must be finite in
+    /// the working type.
     pub min_snr: f64,
 }
 
@@ -540,8 +587,11 @@ impl<T: Real> ModulusTracker<T> {
         let kernel = Kernel::new(dt, &spec.sine, sq(ax / nx).max(sq(af / nf)))?;
         Ok(Self {
             kernel,
-            noise2: [T::from_f64(nx * nx), T::from_f64(nf * nf)],
-            threshold: T::from_f64(sq(min_snr * nx)),
+            noise2: [
+                finite_square::<T>("displacement_noise", nx)?,
+                finite_square::<T>("force_noise", nf)?,
+            ],
+            threshold: finite_square::<T>("min_snr", min_snr * nx)?,
         })
     }
 
@@ -615,6 +665,19 @@ impl<T: Real> ModulusTracker<T> {
 
 fn sq(x: f64) -> f64 {
     x * x
+}
+
+/// `x²` in the working type, refused as [`ParamError::NotFinite`] on
+/// `name` if it overflows there.
+fn finite_square<T: Real>(name: &'static str, x: f64) -> Result<T, ParamError> {
+    let v = T::from_f64(sq(x));
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(ParamError::NotFinite {
+            param: Param::scalar(name),
+        })
+    }
 }
 
 fn scaled<T: Real>(p: &Cov<T>, n2: T) -> [[T; 2]; 2] {
@@ -931,13 +994,17 @@ mod tests {
         assert!(y.abs() < 1e-3, "innovation after the gap {y}");
         assert!((s.amplitude() - 1.0).abs() < 1e-3);
 
-        // A sample that would overflow the state is refused too.
+        // A sample whose update would take the state beyond GUARD (2^60) is
+        // refused too, with the same prediction; 2^59 is taken.
         let mut big = tr.start();
-        tr.step(&mut big, f32::MAX).unwrap();
+        assert_eq!(tr.step(&mut big, f32::MAX), Err(Refused::Overflow));
+        assert_eq!(big.pair(), (0.0, 0.0));
+        tr.step(&mut big, 2f32.powi(59)).unwrap();
+        assert!(big.a() > 0.99 * 2f32.powi(59) && big.a() <= f32::GUARD);
         let kept = big.clone();
         assert_eq!(tr.step(&mut big, -f32::MAX), Err(Refused::Overflow));
         assert_eq!(big.pair(), tr.kernel.rotate(kept.pair()));
-        assert!(big.a().is_finite() && big.b().is_finite());
+        assert_eq!(big.refused(), 2);
 
         // The modulus tracker refuses the pair if either sample is bad.
         let m = ModulusTracker::<f32>::new(
@@ -1134,5 +1201,412 @@ mod tests {
         }
         assert!(amp_err > 0.1, "displacement error {amp_err}");
         assert!(mod_err < 5e-3, "modulus error {mod_err}");
+    }
+
+    #[test]
+    fn ordinary_tracking_is_unchanged_by_the_guard() {
+        // Bit patterns of every a, b and innovation of a noisy f32 run
+        // (FNV-style hash) and the end values, recorded before the state
+        // guard was added: the guard only compares.
+        let dt = 1e-3;
+        let tr = SineTracker::<f32>::new(dt, &spec(10.0, 0.5), CH).unwrap();
+        let mut s = tr.start();
+        let mut g = Gauss(0x1234_5678_9abc_def1);
+        let mut h: u64 = 0;
+        for n in 0..5000 {
+            let z = 2.0 * libm::sin(TAU * 10.3 * dt * n as f64 + 0.3) + 0.05 * g.next();
+            let y = tr.step(&mut s, z as f32).unwrap();
+            for v in [s.a(), s.b(), y] {
+                h = (h ^ v.bits()).wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+        assert_eq!(h, 0x603c_8e0a_08c4_6e53);
+        assert_eq!(s.pair(), (0.521_148_9, 1.612_143_2));
+        let p = tr.covariance(&s);
+        assert_eq!(
+            (p[0][0], p[0][1], p[1][1]),
+            (6.271_389e-9, -1.566_794_3e-10, 6.306_885_2e-9)
+        );
+        let m = ModulusTracker::<f32>::new(
+            dt,
+            &ModulusSpec {
+                sine: spec(10.0, 0.5),
+                displacement: CH,
+                force: Channel {
+                    noise: 1e-2,
+                    amplitude: 5.0,
+                },
+                min_snr: 10.0,
+            },
+        )
+        .unwrap();
+        let mut ms = m.start();
+        let mut h: u64 = 0;
+        for n in 0..5000 {
+            let ph = TAU * 10.0 * dt * n as f64;
+            let x = libm::cos(ph) + 1e-3 * g.next();
+            let f = 3.0 * libm::cos(ph) - 0.7 * libm::sin(ph) + 1e-2 * g.next();
+            let (yx, yf) = m.step(&mut ms, x as f32, f as f32).unwrap();
+            let ((ax, bx), (af, bf)) = (ms.displacement(), ms.force());
+            for v in [ax, bx, af, bf, yx, yf] {
+                h = (h ^ v.bits()).wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+        assert_eq!(h, 0x8f95_bba6_51f0_fc90);
+        assert_eq!(ms.displacement(), (0.998_081_15, -0.062_783_33));
+        assert_eq!(ms.force(), (3.037_794_6, 0.510_287_94));
+        let k = m.modulus(&ms).unwrap();
+        assert_eq!((k.storage, k.loss), (2.999_604_7, 0.699_956_2));
+    }
+
+    #[test]
+    fn samples_near_f32_max_leave_the_state_within_the_guard() {
+        // Accepted, they used to put a and b near f32::MAX, where the next
+        // rotation overflowed (a = -inf, then NaN). Each would now take the
+        // state beyond 2^60: all refused, the state stays zero, and the
+        // tracker then follows a sine as from the start.
+        let ys = [
+            -3.4e38f32, -3.4e38, 3.4e38, 3.4e38, -1e38, 3.4e38, 1e38, -3.4e38, -3.4e38, -2e38,
+        ];
+        let ch = Channel {
+            noise: 1.0,
+            amplitude: 1.0,
+        };
+        let dt = 1e-3;
+        let sine = SineSpec {
+            frequency: 100.0,
+            bandwidth: 1.0,
+        };
+        let t = SineTracker::<f32>::new(dt, &sine, ch).unwrap();
+        let mut s = t.start();
+        for y in ys {
+            assert_eq!(t.step(&mut s, y), Err(Refused::Overflow));
+            assert_eq!(s.pair(), (0.0, 0.0));
+        }
+        assert_eq!(s.refused(), 10);
+        let m = ModulusTracker::<f32>::new(
+            dt,
+            &ModulusSpec {
+                sine,
+                displacement: ch,
+                force: ch,
+                min_snr: 1.0,
+            },
+        )
+        .unwrap();
+        let mut ms = m.start();
+        // Either channel too large refuses the pair; a small one alone is
+        // fine.
+        for (i, y) in ys.into_iter().enumerate() {
+            let (x, f) = if i % 2 == 0 { (y, 0.5) } else { (0.5, y) };
+            assert_eq!(m.step(&mut ms, x, f), Err(Refused::Overflow));
+            assert_eq!(ms.displacement(), (0.0, 0.0));
+            assert_eq!(ms.force(), (0.0, 0.0));
+        }
+        assert_eq!(ms.refused(), 10);
+        for n in 0..2000 {
+            let ph = TAU * 100.0 * dt * n as f64;
+            let (c, sn) = (libm::cos(ph), libm::sin(ph));
+            t.step(&mut s, c as f32).unwrap();
+            m.step(&mut ms, c as f32, (2.0 * c - 0.5 * sn) as f32)
+                .unwrap();
+        }
+        assert!((s.amplitude() - 1.0).abs() < 1e-4, "{}", s.amplitude());
+        let k = m.modulus(&ms).unwrap();
+        assert!((k.storage - 2.0).abs() < 1e-4 && (k.loss - 0.5).abs() < 1e-4);
+    }
+
+    /// Drives a tracker of `C` channels with samples of the order of GUARD,
+    /// the largest finite value, NaN and infinities, and checks the
+    /// documented outcome of every step. Returns how often each path was
+    /// taken: accepted, refused with the rotation stored, refused with the
+    /// rotation halved.
+    fn hostile<T: Real, const C: usize>(
+        kernel: &Kernel<T>,
+        mut step: impl FnMut([T; C]) -> (Result<[T; C], Refused>, [(T, T); C], u32),
+        seed: u64,
+    ) -> [u32; 3] {
+        let g = T::GUARD.to_f64();
+        let big = T::from_f64(f64::MAX).to_f64(); // the largest finite value
+        let levels = [
+            0.0,
+            0.3,
+            0.7,
+            0.99,
+            1.0,
+            1.5,
+            3.0,
+            1e-20,
+            1e20,
+            big,
+            f64::NAN,
+            f64::INFINITY,
+        ];
+        let mut u = Gauss(seed);
+        let mut pick = || {
+            let v = levels[(u.uniform() * levels.len() as f64) as usize];
+            let v = if v.is_finite() && v != big && v > 1e-10 && v < 1e10 {
+                v * g
+            } else {
+                v
+            };
+            T::from_f64(if u.uniform() < 0.5 { -v } else { v })
+        };
+        let mut before = [(T::ZERO, T::ZERO); C];
+        let mut counts = [0u32; 3];
+        for n in 1..=20_000u32 {
+            let z: [T; C] = core::array::from_fn(|_| pick());
+            let rotated = before.map(|p| kernel.rotate(p));
+            let (r, after, refused) = step(z);
+            assert!(guarded(&after), "step {n}: {after:?}");
+            match r {
+                Ok(y) => {
+                    assert!(y.iter().all(|v| v.is_finite()));
+                    counts[0] += 1;
+                }
+                Err(e) => {
+                    let expected = if z.iter().all(|v| v.is_finite()) {
+                        Refused::Overflow
+                    } else {
+                        Refused::NonFiniteSample
+                    };
+                    assert_eq!(e, expected, "step {n}: {z:?}");
+                    if guarded(&rotated) {
+                        assert_eq!(after, rotated);
+                        counts[1] += 1;
+                    } else {
+                        assert_eq!(after, rotated.map(|(a, b)| (a * T::HALF, b * T::HALF)));
+                        counts[2] += 1;
+                    }
+                }
+            }
+            assert_eq!(refused, counts[1] + counts[2]);
+            before = after;
+        }
+        counts
+    }
+
+    fn hostile_runs<T: Real>() {
+        // θ = π/4 turns a state at the guard's corner past it.
+        let (dt, sine) = (1e-3, spec(125.0, 10.0));
+        let ch = Channel {
+            noise: 1.0,
+            amplitude: 1.0,
+        };
+        let t = SineTracker::<T>::new(dt, &sine, ch).unwrap();
+        let mut s = t.start();
+        let counts = hostile(
+            &t.kernel,
+            |[z]| {
+                let r = t.step(&mut s, z).map(|y| [y]);
+                assert!(s.amplitude().is_finite());
+                (r, [s.pair()], s.refused())
+            },
+            0x2545_f491_4f6c_dd1d,
+        );
+        assert!(
+            counts.iter().all(|&c| c > 0),
+            "{} sine: {counts:?}",
+            T::NAME
+        );
+        let m = ModulusTracker::<T>::new(
+            dt,
+            &ModulusSpec {
+                sine,
+                displacement: ch,
+                force: ch,
+                min_snr: 1.0,
+            },
+        )
+        .unwrap();
+        let mut ms = m.start();
+        let counts = hostile(
+            &m.kernel,
+            |[x, f]| {
+                let r = m.step(&mut ms, x, f).map(|(x, f)| [x, f]);
+                if let Some(k) = m.modulus(&ms) {
+                    assert!(k.storage.is_finite() && k.loss.is_finite());
+                }
+                (r, ms.pairs, ms.refused())
+            },
+            0x9e37_79b9_7f4a_7c15,
+        );
+        assert!(
+            counts.iter().all(|&c| c > 0),
+            "{} modulus: {counts:?}",
+            T::NAME
+        );
+    }
+
+    #[test]
+    fn hostile_samples_never_take_the_state_past_the_guard() {
+        hostile_runs::<f32>();
+        hostile_runs::<f64>();
+    }
+
+    #[test]
+    fn a_subnormal_time_step_gives_finite_coefficients() {
+        // 2π f overflowed before f Δt was formed: θ was inf and the first
+        // step gave a = b = NaN. With θ = 2π (f Δt) this is the tracker of
+        // 360 Hz at 1 kHz, 36 Hz wide.
+        let ch = Channel {
+            noise: 1.0,
+            amplitude: 1.0,
+        };
+        let tiny = SineTracker::<f64>::new(1e-308, &spec(3.6e307, 3.6e306), ch).unwrap();
+        let plain = SineTracker::<f64>::new(1e-3, &spec(360.0, 36.0), ch).unwrap();
+        let (vt, vp) = (&tiny.kernel, &plain.kernel);
+        for (a, b) in [
+            (vt.vers, vp.vers),
+            (vt.sin, vp.sin),
+            (vt.vers2, vp.vers2),
+            (vt.sin2, vp.sin2),
+            (vt.q, vp.q),
+        ] {
+            assert!((a / b - 1.0).abs() < 1e-14, "{a} vs {b}");
+        }
+        let (mut st, mut sp) = (tiny.start(), plain.start());
+        for n in 0..100 {
+            let z = libm::cos(TAU * 0.36 * n as f64 + 0.2);
+            tiny.step(&mut st, z).unwrap();
+            plain.step(&mut sp, z).unwrap();
+            let (a, b) = st.pair();
+            assert!(libm::hypot(a - sp.a(), b - sp.b()) < 1e-12, "step {n}");
+        }
+        assert!((st.amplitude() - 1.0).abs() < 1e-9);
+        let modulus = |dt, f, b| {
+            ModulusTracker::<f64>::new(
+                dt,
+                &ModulusSpec {
+                    sine: spec(f, b),
+                    displacement: ch,
+                    force: ch,
+                    min_snr: 10.0,
+                },
+            )
+            .unwrap()
+        };
+        let (mt, mp) = (
+            modulus(1e-308, 3.6e307, 3.6e306),
+            modulus(1e-3, 360.0, 36.0),
+        );
+        let (mut st, mut sp) = (mt.start(), mp.start());
+        for n in 0..100 {
+            let ph = TAU * 0.36 * n as f64;
+            let (x, f) = (libm::cos(ph), 2.0 * libm::cos(ph + 0.3));
+            mt.step(&mut st, x, f).unwrap();
+            mp.step(&mut sp, x, f).unwrap();
+            for (a, b) in [
+                (st.displacement(), sp.displacement()),
+                (st.force(), sp.force()),
+            ] {
+                assert!(libm::hypot(a.0 - b.0, a.1 - b.1) < 1e-12, "step {n}");
+            }
+        }
+
+        // Across time steps from the smallest subnormal to 1e300 and
+        // frequencies up to Nyquist or f64::MAX: either a typed refusal or
+        // finite coefficients and steps (f32: 48 of 216 built, f64: 85,
+        // among them f = f64::MAX at Δt = 1e-310, where 2π f overflows).
+        let mut built = [0; 2];
+        for dt in [5e-324, 1e-320, 1e-310, 1e-308, 1e-300, 1e-3, 1.0, 1e300] {
+            let near_nyquist = [1e-6, 0.01, 0.2, 0.49, 0.499_999_999_999].map(|r| r / dt);
+            for f in near_nyquist
+                .into_iter()
+                .chain([1.0, 1e300, 0.5 * f64::MAX, f64::MAX])
+            {
+                for ratio in [1e-3, 0.05, 0.5] {
+                    let sine = spec(f, ratio * f);
+                    built[0] += check_built::<f32>(SineTracker::new(dt, &sine, ch), dt * f);
+                    built[1] += check_built::<f64>(SineTracker::new(dt, &sine, ch), dt * f);
+                }
+            }
+        }
+        assert_eq!(built, [48, 85]);
+    }
+
+    /// Checks the coefficients and 20 steps of a built tracker; 1 if built.
+    fn check_built<T: Real>(t: Result<SineTracker<T>, ParamError>, f_dt: f64) -> u32 {
+        let Ok(t) = t else {
+            return 0;
+        };
+        let k = &t.kernel;
+        let coefficients = [k.vers, k.sin, k.vers2, k.sin2, k.q, k.p0];
+        assert!(
+            coefficients.iter().all(|c| c.is_finite()) && k.sin > T::ZERO,
+            "{} f dt {f_dt:e}: {coefficients:?}",
+            T::NAME
+        );
+        let mut s = t.start();
+        for n in 0..20 {
+            let z = libm::cos(TAU * f_dt * n as f64);
+            t.step(&mut s, T::from_f64(z)).unwrap();
+            assert!(s.a().is_finite() && s.b().is_finite());
+        }
+        1
+    }
+
+    #[test]
+    fn squares_that_overflow_the_working_type_are_refused() {
+        // The covariance is reported times noise²: 1e40 is infinite in f32.
+        let ch = Channel {
+            noise: 1e20,
+            amplitude: 1e21,
+        };
+        assert_eq!(
+            SineTracker::<f32>::new(1e-3, &spec(10.0, 0.5), ch),
+            Err(ParamError::NotFinite {
+                param: Param::scalar("noise")
+            })
+        );
+        let t = SineTracker::<f64>::new(1e-3, &spec(10.0, 0.5), ch).unwrap();
+        assert!(t.covariance(&t.start())[0][0].is_finite());
+        let m = |displacement, force, min_snr| {
+            ModulusTracker::<f32>::new(
+                1e-3,
+                &ModulusSpec {
+                    sine: spec(10.0, 0.5),
+                    displacement,
+                    force,
+                    min_snr,
+                },
+            )
+        };
+        let not_finite = |name| {
+            Err(ParamError::NotFinite {
+                param: Param::scalar(name),
+            })
+        };
+        assert_eq!(m(ch, CH, 10.0), not_finite("displacement_noise"));
+        assert_eq!(m(CH, ch, 10.0), not_finite("force_noise"));
+        // (min_snr σ_X)² = (1e20 · 1e-3)² = 1e34 fits; (1e25 · 1e-3)² not.
+        assert!(m(CH, CH, 1e20).is_ok());
+        assert_eq!(m(CH, CH, 1e25), not_finite("min_snr"));
+    }
+
+    #[test]
+    fn a_state_at_the_guards_corner_does_not_lock_the_tracker() {
+        // (0.9, 0.9) GUARD turned by θ = π/4 has b = 1.27 GUARD, and no
+        // ordinary sample moves b by that much in one update: each sample
+        // is refused. Kept as it was, the state would stay there for good;
+        // halved, it is back inside and the tracker follows the sine.
+        let dt = 1e-3;
+        let t = SineTracker::<f32>::new(dt, &spec(125.0, 10.0), CH).unwrap();
+        let mut s = t.start();
+        let g = 0.9 * f32::GUARD;
+        s.pair = (g, g);
+        let rotated = t.kernel.rotate(s.pair);
+        assert!(rotated.1 > f32::GUARD);
+        assert_eq!(t.step(&mut s, 0.0), Err(Refused::Overflow));
+        assert_eq!(s.pair(), (0.5 * rotated.0, 0.5 * rotated.1));
+        let mut refused = 1;
+        for n in 1..5000 {
+            let z = libm::cos(TAU * 0.125 * n as f64) as f32;
+            refused += t.step(&mut s, z).is_err() as u32;
+            assert!(guarded(&[s.pair()]));
+        }
+        assert_eq!(s.refused(), refused);
+        assert!(refused < 10, "{refused}");
+        assert!((s.amplitude() - 1.0).abs() < 1e-3, "{}", s.amplitude());
     }
 }
