@@ -218,8 +218,11 @@ impl Exponentials<f32> for MicromathExp {
         // micromath 2.1 lets the exponent 128 through for x in [88.72,
         // 89.42) (a debug assertion there, NaN in release): above ln of the
         // largest f32 the answer is infinite anyway, and a NaN stays NaN.
-        if !(x < Self::LN_MAX) {
-            return if x.is_nan() { x } else { f32::INFINITY };
+        if x.is_nan() {
+            return x;
+        }
+        if x >= Self::LN_MAX {
+            return f32::INFINITY;
         }
         // By path: on a host with std, `x.exp()` would be std's inherent
         // method, not micromath's.
