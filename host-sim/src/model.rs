@@ -42,7 +42,7 @@ impl<T: Real> Backbone<T> for AnyBackbone<T> {
 
 /// Builds the backbone of a scene.
 pub fn backbone<T: Real>(spec: &BackboneSpec) -> Result<AnyBackbone<T>, ParamError> {
-    Ok(match spec {
+    let b = match spec {
         BackboneSpec::Polynomial {
             coefficients,
             range,
@@ -50,7 +50,11 @@ pub fn backbone<T: Real>(spec: &BackboneSpec) -> Result<AnyBackbone<T>, ParamErr
         BackboneSpec::Spline { x, force } => {
             AnyBackbone::Spline(Box::new(MonotoneSpline::new(x, force)?))
         }
-    })
+    };
+    // What a bushing asks of its backbone (its rest point within the
+    // guard), checked where the scene is read rather than when it is built.
+    Bushing::new(b.clone(), ())?;
+    Ok(b)
 }
 
 /// A Maxwell bank sized at run time; the scheme is the core's
