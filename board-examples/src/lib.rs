@@ -346,6 +346,18 @@ pub type Mount<T> = SixDof<T, Polynomial<T, 4>, MountEffects<T>>;
 /// Its cost per step is what the accuracy-cost report lists (family
 /// `six-dof`).
 pub fn engine_mount<T: Real>(connectivity: Connectivity) -> Result<Mount<T>, ParamError> {
+    engine_mount_scaled(connectivity, 1.0)
+}
+
+/// [`engine_mount`] with its torsion and tilt stiffnesses and slip moments
+/// multiplied by `rotations`: a working type of small range (Q16, whose
+/// guard is 16 384) takes the mount's laws only below its guard, and the
+/// 6-DOF kinematics ask for N·mm with mm arms, so the rotations are made
+/// softer rather than the units changed.
+pub fn engine_mount_scaled<T: Real>(
+    connectivity: Connectivity,
+    rotations: f64,
+) -> Result<Mount<T>, ParamError> {
     let axis = |k: f64, slip: f64| -> Result<MountAxis<T>, ParamError> {
         Bushing::new(
             Polynomial::new(&[0.0, k, 0.0, 0.02 * k], (-1e3, 1e3))?,
@@ -368,9 +380,9 @@ pub fn engine_mount<T: Real>(connectivity: Connectivity) -> Result<Mount<T>, Par
             axis(200.0, 0.5)?,
             axis(200.0, 0.5)?,
             axis(600.0, 1.5)?,
-            axis(2.0e5, 100.0)?,
-            axis(5.0e5, 250.0)?,
-            axis(5.0e5, 250.0)?,
+            axis(2.0e5 * rotations, 100.0 * rotations)?,
+            axis(5.0e5 * rotations, 250.0 * rotations)?,
+            axis(5.0e5 * rotations, 250.0 * rotations)?,
         ],
         [[0.0, 0.0, 20.0], [0.0, 0.0, -20.0]],
         connectivity,
