@@ -44,7 +44,12 @@
 //!   have moved while the mode was gone) and are tracked again. A step
 //!   that would leave a non-finite state (or meets a covariance that is not
 //!   positive definite, or an innovation variance that is not positive and
-//!   below [`Real::GUARD`]) is undone and the covariance reset.
+//!   below [`Real::GUARD`]) is undone and the covariance reset to its start
+//!   value. That value, the process noise and the sensor noise variances
+//!   are checked below [`Real::GUARD`] in the working type at construction
+//!   (a tuning beyond is a typed error), so the reset restores a finite
+//!   covariance a step can use, and the state stays finite whatever the
+//!   samples.
 //! - **States**: `N = modes (2 sensors + 2)` values and an N×N covariance.
 //! - **Cost** per sample, n = N states, M modes, C sensors: EKF about 6n²
 //!   (prediction) + C (n² + 4Mn) multiply-adds and one division per sensor;
@@ -192,6 +197,13 @@ pub enum Filter {
 ///   back above twice that.
 /// - `max_damping`: the largest |damping ratio| accepted; `max_frequency`:
 ///   the largest phase step, as a fraction of Nyquist.
+///
+/// [`ModalTracker::new`] refuses (`OutOfRange`, with the largest value
+/// allowed) a walk or an initial error whose variance in the scaled states,
+/// per step or at the start, is not below [`Real::GUARD`] of the working
+/// type (`2^60` in `f32`: an initial damping error up to about
+/// `2^30 / (ω_0 dt)`), and likewise a sensor noise against the mode
+/// amplitudes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Tuning {
     /// Random walk of each mode's frequency, Hz/√s.
@@ -317,6 +329,35 @@ fn sq(x: f64) -> f64 {
 
 fn powk(x: f64, k: i32) -> f64 {
     (0..k).fold(1.0, |acc, _| acc * x)
+}
+
+/// A variance the covariance starts from (and is reset to) or gains at
+/// every step, formed from the tuning value `value` in units of `unit`
+/// (`variance = (value unit)²`), in the working type: refused unless below
+/// [`Real::GUARD`], as no step can use a covariance entry at or beyond it
+/// (the pivot and innovation checks refuse it), and a start covariance that
+/// overflows the type would leave a repair nothing finite to restore. The
+/// error gives the largest value, `√GUARD / unit`.
+fn variance<T: Real>(
+    param: Param,
+    value: f64,
+    min_open: bool,
+    variance: f64,
+    unit: f64,
+) -> Result<T, ParamError> {
+    let guard = T::GUARD.to_f64();
+    // NaN fails too.
+    if variance < guard {
+        Ok(T::from_f64(variance))
+    } else {
+        Err(ParamError::OutOfRange {
+            param,
+            value,
+            min: 0.0,
+            min_open,
+            max: libm::sqrt(guard) / unit,
+        })
+    }
 }
 
 #[inline(always)]
@@ -462,6 +503,28 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         )?;
         let nyquist = 0.5 / dt;
         let theta_max = core::f64::consts::PI * max_f;
+        let root_dt = libm::sqrt(dt);
+        let q_theta = variance(
+            Param::scalar("frequency_walk"),
+            f_walk,
+            false,
+            sq(core::f64::consts::TAU * f_walk * dt) * dt,
+            core::f64::consts::TAU * dt * root_dt,
+        )?;
+        let q_amp = variance(
+            Param::scalar("amplitude_walk"),
+            a_walk,
+            false,
+            a_walk * a_walk * dt,
+            root_dt,
+        )?;
+        let p0_amp = variance(
+            Param::scalar("initial_amplitude_error"),
+            e_a,
+            true,
+            e_a * e_a,
+            1.0,
+        )?;
 
         let mut me = Self {
             modes: m_n,
@@ -472,9 +535,9 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             meas_gain: [T::ZERO; N],
             scale: [T::ZERO; N],
             r: [T::ZERO; N],
-            q_theta: T::from_f64(sq(core::f64::consts::TAU * f_walk * dt) * dt),
+            q_theta,
             q_lambda: [T::ZERO; N],
-            q_amp: T::from_f64(a_walk * a_walk * dt),
+            q_amp,
             p0: [T::ZERO; N],
             floor: [T::ZERO; N],
             x0: [T::ZERO; N],
@@ -563,9 +626,21 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             let (ti, li) = me.theta_lambda(m);
             put(&mut me.x0, ti, T::from_f64(theta));
             put(&mut me.x0, li, T::from_f64(-z * w0dt));
-            put(&mut me.p0, ti, T::from_f64(sq(e_f * theta)));
-            put(&mut me.p0, li, T::from_f64(sq(e_z * w0dt)));
-            put(&mut me.q_lambda, m, T::from_f64(sq(z_walk * w0dt) * dt));
+            let e_theta = Param::scalar("initial_frequency_error");
+            put(
+                &mut me.p0,
+                ti,
+                variance(e_theta, e_f, true, sq(e_f * theta), theta)?,
+            );
+            let e_lambda = Param::scalar("initial_damping_error");
+            put(
+                &mut me.p0,
+                li,
+                variance(e_lambda, e_z, true, sq(e_z * w0dt), w0dt)?,
+            );
+            let walk = Param::scalar("damping_walk");
+            let q = variance(walk, z_walk, false, sq(z_walk * w0dt) * dt, w0dt * root_dt)?;
+            put(&mut me.q_lambda, m, q);
             let eps = 64.0 * T::EPSILON.to_f64();
             put(&mut me.floor, ti, T::from_f64(sq(eps * theta)));
             put(&mut me.floor, li, T::from_f64(sq(eps * w0dt)));
@@ -614,7 +689,8 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             put(&mut me.measured, c, s.measured);
             put(&mut me.scale, c, T::from_f64(total));
             put(&mut me.meas_gain, c, T::from_f64(powk(dt, k) / total));
-            let r = T::from_f64(sq(noise * powk(dt, k) / total));
+            let r = sq(noise * powk(dt, k) / total);
+            let r = variance(Param::item("noise", c), noise, true, r, powk(dt, k) / total)?;
             put(&mut me.r, c, r);
             let fade2 = T::from_f64(fade * fade);
             put(&mut me.fade_below, c, fade2 * r);
@@ -623,8 +699,8 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 let (ai, bi) = me.pair(m, c);
                 put(&mut me.x0, ai, T::from_f64(dr / total));
                 put(&mut me.x0, bi, T::from_f64(di / total));
-                put(&mut me.p0, ai, T::from_f64(e_a * e_a));
-                put(&mut me.p0, bi, T::from_f64(e_a * e_a));
+                put(&mut me.p0, ai, p0_amp);
+                put(&mut me.p0, bi, p0_amp);
                 let eps = 64.0 * T::EPSILON.to_f64();
                 put(&mut me.floor, ai, T::from_f64(eps * eps));
                 put(&mut me.floor, bi, T::from_f64(eps * eps));
@@ -1943,6 +2019,195 @@ mod tests {
                 Filter::Ekf
             )
             .is_err()
+        );
+    }
+
+    /// The set-up of fuzz input `crash-3dab1a41`: one mode, one
+    /// displacement sensor, the default UKF, and a tuning with an initial
+    /// damping error of 3.6e88 and a damping walk of 1e308.
+    struct Crash {
+        dt: f64,
+        sensors: [SensorSpec; 1],
+        modes: [ModeInit; 1],
+        amplitudes: [(f64, f64); 1],
+        tuning: Tuning,
+    }
+
+    fn crash_setup() -> Crash {
+        let sensors = [SensorSpec {
+            measured: Measured::Displacement,
+            noise: 0.000_380_398_102_815_358_2,
+        }];
+        let modes = [ModeInit {
+            frequency: 0.567_662_700_022_572_9,
+            damping: 0.103_909_034_729_003_9,
+        }];
+        let tuning = Tuning {
+            frequency_walk: 0.156_304_359_436_035_16,
+            damping_walk: 1e308,
+            amplitude_walk: 0.949_062_347_412_109_4,
+            initial_frequency_error: 1e-4,
+            initial_damping_error: 3.606_372_053_036_077e88,
+            initial_amplitude_error: 0.746_309_693_702_413_5,
+            gate: 6.137_052_536_010_742,
+            outlier_run: 13,
+            fade_snr: 9.294_834_136_962_89,
+            max_damping: 0.920_384_960_174_560_5,
+            max_frequency: 0.989_984_893_798_828_1,
+        };
+        Crash {
+            dt: 2.053_479_933_262_200_4e-4,
+            sensors,
+            modes,
+            amplitudes: [(0.0, -8.749_370_574_951_172)],
+            tuning,
+        }
+    }
+
+    fn crash_tracker(tuning: &Tuning) -> Result<ModalTracker<f32, 4>, ParamError> {
+        let Crash {
+            dt,
+            sensors,
+            modes,
+            amplitudes,
+            ..
+        } = crash_setup();
+        ModalTracker::new(
+            dt,
+            &sensors,
+            &modes,
+            &amplitudes,
+            tuning,
+            Filter::Ukf(UtParams::default()),
+        )
+    }
+
+    fn finite_state<const N: usize>(s: &ModalState<f32, N>) -> bool {
+        s.x()
+            .iter()
+            .chain(s.covariance().iter().flatten())
+            .all(|v| v.is_finite())
+    }
+
+    #[test]
+    fn start_and_process_variances_beyond_the_guard_are_refused() {
+        // The λ start variance (3.6e88 × ω_0 dt = 7.3e-4)² overflowed f32,
+        // so the start covariance, and every repair, held an infinity: the
+        // first step (its prediction refused, hence `repaired`) left a
+        // non-finite covariance. Now a typed error at construction.
+        let tuning = crash_setup().tuning;
+        // The fuzz target's check: whatever `new` accepts keeps a finite
+        // state.
+        if let Ok(t) = crash_tracker(&tuning) {
+            let mut s = t.start();
+            let r = t.step(&mut s, &[4.184_379_2e-5]);
+            assert!(finite_state(&s), "non-finite tracker state after {r:?}");
+        }
+        let e = crash_tracker(&tuning).map(|_| ());
+        assert!(
+            matches!(e, Err(ParamError::OutOfRange { param, .. })
+                if param == Param::scalar("initial_damping_error")),
+            "{e:?}"
+        );
+        // With that error sane, the damping walk's per-step variance
+        // (1e308 ω_0 dt)² dt is refused in turn.
+        let sane = Tuning {
+            initial_damping_error: 0.01,
+            ..tuning
+        };
+        let e = crash_tracker(&sane).map(|_| ());
+        assert!(
+            matches!(e, Err(ParamError::OutOfRange { param, .. })
+                if param == Param::scalar("damping_walk")),
+            "{e:?}"
+        );
+        // Both sane: the fuzz input's one sample updates a finite state.
+        let t = crash_tracker(&Tuning {
+            damping_walk: 0.01,
+            ..sane
+        })
+        .unwrap();
+        let mut s = t.start();
+        assert!(finite_state(&s));
+        let r = t.step(&mut s, &[4.184_379_2e-5]);
+        assert!(finite_state(&s), "{r:?} {:?} {:?}", s.x(), s.covariance());
+        assert!(!r.repaired && r.accepted == 1, "{r:?}");
+    }
+
+    #[test]
+    fn variances_just_below_the_guard_keep_a_finite_state() {
+        // Each walk and initial error of the crash set-up in turn: 1e300 is
+        // refused with the largest value allowed; 0.99 of it builds, and
+        // EKF and UKF stay finite over wild samples.
+        type Field = fn(&mut Tuning) -> &mut f64;
+        let fields: [(&str, Field); 6] = [
+            ("frequency_walk", |t| &mut t.frequency_walk),
+            ("damping_walk", |t| &mut t.damping_walk),
+            ("amplitude_walk", |t| &mut t.amplitude_walk),
+            ("initial_frequency_error", |t| {
+                &mut t.initial_frequency_error
+            }),
+            ("initial_damping_error", |t| &mut t.initial_damping_error),
+            ("initial_amplitude_error", |t| {
+                &mut t.initial_amplitude_error
+            }),
+        ];
+        let Crash {
+            dt,
+            sensors,
+            modes,
+            amplitudes,
+            ..
+        } = crash_setup();
+        let samples = [4.184_379_2e-5, f32::NAN, 1e30, -1e30, 0.0, f32::MAX, 1e-3];
+        for (name, field) in fields {
+            let mut t = Tuning::default();
+            *field(&mut t) = 1e300;
+            let max = match crash_tracker(&t) {
+                Err(ParamError::OutOfRange {
+                    param, value, max, ..
+                }) if param == Param::scalar(name) && value == 1e300 => max,
+                e => panic!("{name}: {:?}", e.map(|_| ())),
+            };
+            *field(&mut t) = 0.99 * max;
+            for filter in [Filter::Ekf, Filter::Ukf(UtParams::default())] {
+                let tr = ModalTracker::<f32, 4>::new(dt, &sensors, &modes, &amplitudes, &t, filter)
+                    .unwrap();
+                let mut s = tr.start();
+                assert!(finite_state(&s), "{name} start");
+                for k in 0..64 {
+                    let r = tr.step(&mut s, &[samples[k % samples.len()]]);
+                    assert!(finite_state(&s), "{name} {filter:?} step {k}: {r:?}");
+                }
+            }
+        }
+        // The noise of a sensor against the amplitudes: its variance in
+        // the scaled states is bounded the same way.
+        let loud = [SensorSpec {
+            noise: 1e30,
+            ..sensors[0]
+        }];
+        let e = ModalTracker::<f32, 4>::new(
+            dt,
+            &loud,
+            &modes,
+            &amplitudes,
+            &Tuning::default(),
+            Filter::Ekf,
+        );
+        assert!(matches!(e, Err(ParamError::OutOfRange { param, .. })
+                if param == Param::item("noise", 0)));
+        // In f64 the guard is 2^500: the same noise is accepted.
+        assert!(
+            ModalTracker::<f64, 4>::new(
+                dt,
+                &loud,
+                &modes,
+                &amplitudes,
+                &Tuning::default(),
+                Filter::Ekf
+            )
+            .is_ok()
         );
     }
 
