@@ -65,14 +65,6 @@ impl<T: Real> EffectOutput<T> {
         }
     }
 
-    /// Force and tangent finite and within [`Real::GUARD`] in magnitude
-    /// (a NaN fails): what an accepted bushing step guarantees of each
-    /// effect.
-    #[inline(always)]
-    pub fn guarded(&self) -> bool {
-        within(self.force) && within(self.tangent)
-    }
-
     fn plus(self, o: Self) -> Self {
         Self {
             force: self.force + o.force,

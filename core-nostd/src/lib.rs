@@ -40,7 +40,11 @@
 //! - The output carries the force, the algorithmic tangent dF_n/dx_n and the
 //!   energy dissipated in the step, per effect.
 //! - A non-finite or out-of-range input never poisons the state: the step is
-//!   refused, the last force returned and a fault flag raised.
+//!   refused, the last force returned and a fault flag raised. So is a step
+//!   whose effects' forces or tangents, or the totals, would not be finite
+//!   or would exceed [`Real::GUARD`]: every accepted output is within it.
+//! - The energy dissipated in a step is finite and never negative, except
+//!   for the Grünwald cell ([`EffectOutput::dissipated`]).
 //!
 //! ```
 //! use bushing::{Bushing, MaxwellBank, MaxwellForm, MaxwellSpec, Polynomial};
