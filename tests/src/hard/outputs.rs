@@ -1,6 +1,7 @@
 //! Hard cases of the outputs a step returns: effect forces beyond the
 //! guard, tables that do not fit the working type, the energy of the step
-//! that closes an inner loop, and the 6-DOF tangent after a refused pose.
+//! that closes an inner loop, no negative energy on any step, and the 6-DOF
+//! tangent after a refused pose.
 
 use bushing::six_dof::{Connectivity, Pose, Quat, SixDof};
 use bushing::{Dashpot, FirstLoading, KfTable, Real, TurningPoints};
@@ -178,4 +179,42 @@ pub(super) fn six_dof_tangent_after_refused_pose() -> Measure {
         }
     }
     Ok(wrong)
+}
+
+/// The default-like bushing (4 Maxwell, 3 Jenkins, 1 x_f) under random
+/// closed cycles: no step dissipates a negative energy.
+pub(super) fn dissipation_never_negative() -> Measure {
+    let dt = 5e-4;
+    let maxwell =
+        MaxwellBank::<f32, 4>::new(MaxwellForm::RateExactRamp, &four_cells(), dt).map_err(param)?;
+    let jenkins = [
+        IwanCellSpec::from_slip_distance(0.05, 150.0, 0.05),
+        IwanCellSpec::from_slip_distance(0.05, 150.0, 0.2),
+        IwanCellSpec::from_slip_distance(0.05, 150.0, 0.8),
+    ];
+    let iwan = IwanBank::<f32, 3>::new(&jenkins).map_err(param)?;
+    let xf = XfBank::<f32, 1>::new(XfForm::ExactRamp, &[XfSpec::hz(5.0, 0.05, 0.02)], dt)
+        .map_err(param)?;
+    let bb = Polynomial::<f32, 4>::new(&[0.0, 150.0, 0.0, 4.0], (-6.0, 6.0)).map_err(param)?;
+    let b = Bushing::new(bb, (maxwell, iwan, xf)).map_err(param)?;
+    let mut s = b.state_at(0.0);
+    let mut rng = Noise::new(17);
+    let mut negative = 0.0;
+    // Closed triangular cycles of random amplitude (1e-4 to 3 mm) and
+    // length (4 to 400 steps), around random offsets.
+    for _ in 0..200 {
+        let amplitude = libm::pow(10.0, -4.0 + 4.5 * rng.uniform()).min(3.0);
+        let offset = 2.0 * (rng.uniform() - 0.5);
+        let half = 2 + (rng.uniform() * 200.0) as usize;
+        for k in 0..2 * half {
+            let u = if k < half {
+                k as f64 / half as f64
+            } else {
+                (2 * half - k) as f64 / half as f64
+            };
+            let out = b.step(&mut s, (offset + amplitude * u) as f32);
+            negative += miss(out.dissipated >= 0.0);
+        }
+    }
+    Ok(negative)
 }
