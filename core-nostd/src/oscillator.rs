@@ -747,7 +747,13 @@ mod tests {
 
     #[test]
     fn time_steps_whose_coefficients_leave_the_working_type_are_refused() {
-        let dt = Param::scalar("dt");
+        let refused = |value, min, max| ParamError::OutOfRange {
+            param: Param::scalar("dt"),
+            value,
+            min,
+            min_open: false,
+            max,
+        };
         // f32: β = dt²/4 from 2^-148 (the smallest power of four f32 holds)
         // to the guard 2^60, i.e. dt from 2^-73 to 2^31.
         let (min, max) = (2f64.powi(-73), 2f64.powi(31));
@@ -755,24 +761,12 @@ mod tests {
         // dt = 1e-300 makes h, h/2 and β all 0 in f32.
         assert_eq!(
             Oscillator::new(linear_f32(100.0), 1e-300).unwrap_err(),
-            ParamError::OutOfRange {
-                param: dt,
-                value: 1e-300,
-                min,
-                min_open: false,
-                max
-            }
+            refused(1e-300, min, max)
         );
         for value in [0.99 * min, 1.01 * max, 1e30] {
             assert_eq!(
                 Oscillator::new(linear_f32(1.0), value).unwrap_err(),
-                ParamError::OutOfRange {
-                    param: dt,
-                    value,
-                    min,
-                    min_open: false,
-                    max
-                }
+                refused(value, min, max)
             );
         }
         // At the bounds: every coefficient positive and finite in f32.
@@ -786,13 +780,7 @@ mod tests {
         assert_eq!(dt_range::<f64>(), (min, max));
         assert_eq!(
             Oscillator::new(linear(1.0), 1e-300).unwrap_err(),
-            ParamError::OutOfRange {
-                param: dt,
-                value: 1e-300,
-                min,
-                min_open: false,
-                max
-            }
+            refused(1e-300, min, max)
         );
         // The chord slope 1 / (1 + β K_0): β K_0 at most the guard.
         let k0 = 1e12f32 as f64;
