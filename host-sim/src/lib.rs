@@ -17,6 +17,7 @@ pub mod iwan_report;
 pub mod model;
 pub mod modulus;
 pub mod powertrain;
+pub mod probe;
 pub mod profile;
 pub mod run;
 pub mod scene;

@@ -47,7 +47,10 @@ fn every_scene_is_listed() {
     found.sort();
     let mut listed: Vec<String> = listed().into_iter().map(|(p, _)| p).collect();
     listed.sort();
-    assert_eq!(found, listed, "scenes/trace-hashes.sha256 lists every scene");
+    assert_eq!(
+        found, listed,
+        "scenes/trace-hashes.sha256 lists every scene"
+    );
 }
 
 #[test]

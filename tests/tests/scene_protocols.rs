@@ -8,7 +8,7 @@ use std::f64::consts::SQRT_2;
 
 use bushing_sim::scene::{BackboneSpec, Effect};
 use bushing_sim::validate::{self, Outcome};
-use bushing_sim::{Scene, run};
+use bushing_sim::{Scene, probe, run};
 use common::root;
 
 /// Carroll's law (c1 I1 + c2 I1^4 + c3 sqrt(I2)) of one Table 3.1 material.
@@ -124,7 +124,7 @@ fn table_3_1_scenes_carry_the_identified_parameters() {
 }
 
 /// Mean storage modulus of the modulus points at `amplitude` and `mean`.
-fn storage(points: &[run::ModulusPoint], amplitude: f64, mean: f64, freq: f64) -> f64 {
+fn storage(points: &[probe::ModulusPoint], amplitude: f64, mean: f64, freq: f64) -> f64 {
     let sel: Vec<f64> = points
         .iter()
         .filter(|p| {
@@ -140,7 +140,7 @@ fn storage(points: &[run::ModulusPoint], amplitude: f64, mean: f64, freq: f64) -
     sel.iter().sum::<f64>() / sel.len() as f64
 }
 
-fn modulus(name: &str) -> Vec<run::ModulusPoint> {
+fn modulus(name: &str) -> Vec<probe::ModulusPoint> {
     let scene = load(name);
     let out = std::env::temp_dir().join(format!("bushing-protocol-{name}-{}", std::process::id()));
     let summary = run::run(&scene, &out).unwrap();
