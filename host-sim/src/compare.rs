@@ -441,36 +441,19 @@ pub fn compare(
     Ok(c)
 }
 
-/// `compare-trace HOST_TRACE.csv FIRMWARE.log [--within N]` (the words
-/// after the command, in any order): reads both files and compares them.
-/// The caller prints the comparison and fails if it did not pass.
-pub fn cli(args: &[&str]) -> Result<Comparison, String> {
-    let mut files = Vec::new();
-    let mut within = None;
-    let mut it = args.iter();
-    while let Some(&a) = it.next() {
-        match a {
-            "--within" => {
-                let v = it.next().ok_or("--within needs a bound in N")?;
-                let n = v
-                    .parse::<f64>()
-                    .map_err(|_| format!("--within: expected a number of N, got '{v}'"))?;
-                if within.replace(n).is_some() {
-                    return Err("--within given twice".into());
-                }
-            }
-            _ if a.starts_with("--") => return Err(format!("compare-trace: unknown option {a}")),
-            _ => files.push(a),
-        }
-    }
-    let [trace_file, log_file] = files[..] else {
-        return Err(
-            "compare-trace takes HOST_TRACE.csv FIRMWARE.log [--within N]: two files".into(),
-        );
+/// `compare-trace HOST_TRACE.csv FIRMWARE.log [--within N]`: reads both
+/// files and compares them. The caller prints the comparison and fails if
+/// it did not pass.
+pub fn compare_files(
+    trace_file: &std::path::Path,
+    log_file: &std::path::Path,
+    within: Option<f64>,
+) -> Result<Comparison, String> {
+    let read = |f: &std::path::Path| {
+        std::fs::read_to_string(f).map_err(|e| format!("{}: {e}", f.display()))
     };
-    let read = |f: &str| std::fs::read_to_string(f).map_err(|e| format!("{f}: {e}"));
-    let trace = parse_trace(trace_file, &read(trace_file)?)?;
-    let log = parse_log(log_file, &read(log_file)?)?;
+    let trace = parse_trace(&trace_file.display().to_string(), &read(trace_file)?)?;
+    let log = parse_log(&log_file.display().to_string(), &read(log_file)?)?;
     compare(&trace, &log, within)
 }
 

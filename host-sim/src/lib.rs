@@ -9,6 +9,7 @@
 #![forbid(unsafe_code)]
 
 pub mod accuracy_cost;
+pub mod cli;
 pub mod compare;
 pub mod cost;
 pub mod fit;
@@ -16,6 +17,7 @@ pub mod fractional_report;
 pub mod iwan_report;
 pub mod model;
 pub mod modulus;
+pub mod output;
 pub mod powertrain;
 pub mod probe;
 pub mod profile;

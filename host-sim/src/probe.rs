@@ -77,9 +77,18 @@ pub struct ModulusProbe {
     fed: u64,
     next_point: u64,
     points: Vec<ModulusPoint>,
+    /// Least time between two kept points, s.
+    gap: f64,
+    /// Points were dropped to stay under [`MAX_MODULUS_POINTS`].
+    capped: bool,
     /// Some sample had a sine frequency.
     pub saw_sine: bool,
 }
+
+/// Most modulus points a run keeps (about 21 MB of `modulus.csv`). When a
+/// run reaches it, every other point is dropped and the least time between
+/// points doubles, so the points still cover the whole run evenly.
+pub const MAX_MODULUS_POINTS: usize = 100_000;
 
 impl ModulusProbe {
     /// A probe for time step `dt` on a bushing of tangent `stiffness`.
@@ -100,8 +109,45 @@ impl ModulusProbe {
             fed: 0,
             next_point: SKIPPED_PERIODS,
             points: Vec::new(),
+            gap: 0.0,
+            capped: false,
             saw_sine: false,
         }
+    }
+
+    /// Keeps no more points than the trace has rows: two points at least
+    /// `every` steps apart (a point per period otherwise).
+    pub fn thinned(mut self, every: u64) -> Self {
+        self.gap = (every.max(1) as f64 - 0.5) * self.dt;
+        self
+    }
+
+    /// Points were dropped to stay under [`MAX_MODULUS_POINTS`].
+    pub fn capped(&self) -> bool {
+        self.capped
+    }
+
+    fn keep(&mut self, point: ModulusPoint) {
+        if let Some(last) = self.points.last()
+            && point.time_s - last.time_s < self.gap
+        {
+            return;
+        }
+        if self.points.len() >= MAX_MODULUS_POINTS {
+            let mut k = 0;
+            self.points.retain(|_| {
+                k += 1;
+                k % 2 == 1
+            });
+            self.gap = 2.0 * self.gap.max(self.dt);
+            self.capped = true;
+            if let Some(last) = self.points.last()
+                && point.time_s - last.time_s < self.gap
+            {
+                return;
+            }
+        }
+        self.points.push(point);
     }
 
     /// One sample at time `t`: displacement `x` (mm) and force `f` (N), with
@@ -170,14 +216,15 @@ impl ModulusProbe {
             self.next_point += 1;
             if let Some(m) = tracker.modulus(state) {
                 let (ax, bx) = state.displacement();
-                self.points.push(ModulusPoint {
+                let point = ModulusPoint {
                     time_s: tc,
                     frequency_hz: tracker.frequency(),
                     amplitude_mm: if ac.is_finite() { ac } else { ax.hypot(bx) },
                     mean_mm: mean.0,
                     storage: m.storage,
                     loss: m.loss,
-                });
+                };
+                self.keep(point);
             }
         }
     }

@@ -718,9 +718,10 @@ fn interpolate(samples: &[(f64, f64)], t: f64) -> f64 {
 }
 
 /// Completes a profile as parsed: a replay reads its CSV file, `dir`
-/// being the directory relative file names start from. Other profiles are
-/// returned unchanged.
-pub fn resolve(p: ProfileSpec, dir: &Path) -> Result<ProfileSpec, String> {
+/// being the directory relative file names start from; with `confine`,
+/// the file must be inside `dir` once links and `..` are resolved. Other
+/// profiles are returned unchanged.
+pub fn resolve(p: ProfileSpec, dir: &Path, confine: bool) -> Result<ProfileSpec, String> {
     let ProfileSpec::Replay {
         file,
         column,
@@ -749,6 +750,19 @@ pub fn resolve(p: ProfileSpec, dir: &Path) -> Result<ProfileSpec, String> {
     let path = dir.join(&file);
     let name = path.display().to_string();
     let cannot = |e: std::io::Error| format!("cannot read replay file {name}: {e}");
+    if confine {
+        let base = dir
+            .canonicalize()
+            .or_else(|_| Path::new(".").canonicalize())
+            .map_err(cannot)?;
+        let real = path.canonicalize().map_err(cannot)?;
+        if !real.starts_with(&base) {
+            return Err(format!(
+                "replay file {}: outside the scene's folder, which --confine forbids",
+                shown(&file)
+            ));
+        }
+    }
     // Only regular files, checked before opening: a device or a pipe could
     // block or never end.
     let meta = std::fs::metadata(&path).map_err(cannot)?;
@@ -808,9 +822,11 @@ fn clean(field: &str) -> &str {
         .trim()
 }
 
-/// At most 40 characters of a field, for messages.
+/// At most 40 characters of a field, for messages, with control and
+/// other invisible characters escaped (`\u{1b}`), so that a hostile file
+/// cannot write to the terminal through an error.
 fn shown(field: &str) -> String {
-    let mut s: String = field.chars().take(40).collect();
+    let mut s: String = field.chars().take(40).flat_map(char::escape_debug).collect();
     if field.chars().nth(40).is_some() {
         s.push('…');
     }
@@ -1675,7 +1691,7 @@ mod tests {
                 samples: Vec::new(),
             }
         };
-        let p = resolve(replay(Column::Name("x".into()), None, Some(2.0)), &dir).unwrap();
+        let p = resolve(replay(Column::Name("x".into()), None, Some(2.0)), &dir, false).unwrap();
         assert_eq!(steps(&p, DT), Ok(500));
         assert_eq!(displacement(&p, 0.25), 1.0);
         // Without the file: no samples.
@@ -1687,22 +1703,24 @@ mod tests {
         let e = resolve(
             replay(Column::Index(2), Some(Column::Index(1)), Some(2.0)),
             &dir,
+            false,
         )
         .unwrap_err();
         assert_eq!(e, "give time_column or rate_hz, not both");
-        let e = resolve(replay(Column::Index(2), None, None), &dir).unwrap_err();
+        let e = resolve(replay(Column::Index(2), None, None), &dir, false).unwrap_err();
         assert_eq!(e, "give time_column (a time column in s) or rate_hz (Hz)");
-        let e = resolve(replay(Column::Index(0), None, Some(2.0)), &dir).unwrap_err();
+        let e = resolve(replay(Column::Index(0), None, Some(2.0)), &dir, false).unwrap_err();
         assert_eq!(e, "column = 0: column indices count from 1 to 10000");
         let e = resolve(
             replay(Column::Index(2), Some(Column::Name(" ".into())), None),
             &dir,
+            false,
         )
         .unwrap_err();
         assert_eq!(e, "time_column: empty column name");
-        let e = resolve(replay(Column::Index(2), None, Some(-1.0)), &dir).unwrap_err();
+        let e = resolve(replay(Column::Index(2), None, Some(-1.0)), &dir, false).unwrap_err();
         assert_eq!(e, "rate_hz must be finite and > 0, got -1");
-        let e = resolve(replay(Column::Index(2), None, Some(2.0)), &dir.join("no")).unwrap_err();
+        let e = resolve(replay(Column::Index(2), None, Some(2.0)), &dir.join("no"), false).unwrap_err();
         assert!(
             e.starts_with("cannot read replay file ") && e.contains("d.csv"),
             "{e}"
@@ -1711,18 +1729,18 @@ mod tests {
         if let ProfileSpec::Replay { file, .. } = &mut directory {
             *file = ".".into();
         }
-        let e = resolve(directory, &dir).unwrap_err();
+        let e = resolve(directory, &dir, false).unwrap_err();
         assert!(e.ends_with(" is not a regular file"), "{e}");
         let mut empty_name = replay(Column::Index(2), None, Some(2.0));
         if let ProfileSpec::Replay { file, .. } = &mut empty_name {
             file.clear();
         }
         assert_eq!(
-            resolve(empty_name, &dir).unwrap_err(),
+            resolve(empty_name, &dir, false).unwrap_err(),
             "file must name a CSV file"
         );
         // Other profiles pass through.
-        assert_eq!(resolve(multi(), &dir).unwrap(), multi());
+        assert_eq!(resolve(multi(), &dir, false).unwrap(), multi());
         std::fs::remove_dir_all(dir).ok();
     }
 

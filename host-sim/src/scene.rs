@@ -154,7 +154,9 @@ pub struct RunSpec {
 }
 
 /// Working type of the models.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, serde::Serialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum NumberType {
     /// Single precision, as on a Cortex-M4F.
@@ -533,6 +535,9 @@ pub struct SceneError {
     pub at: Option<Location>,
     /// What was expected.
     pub message: String,
+    /// The scene's text and the byte range at fault, for a report that
+    /// shows the line with a caret ([`miette::Diagnostic`]).
+    pub source: Option<(std::sync::Arc<str>, Range<usize>)>,
 }
 
 impl fmt::Display for SceneError {
@@ -545,6 +550,40 @@ impl fmt::Display for SceneError {
 }
 
 impl std::error::Error for SceneError {}
+
+impl miette::Diagnostic for SceneError {
+    fn source_code(&self) -> Option<&dyn miette::SourceCode> {
+        self.source
+            .as_ref()
+            .map(|(text, _)| text as &dyn miette::SourceCode)
+    }
+
+    fn labels(&self) -> Option<Box<dyn Iterator<Item = miette::LabeledSpan> + '_>> {
+        let (text, span) = self.source.as_ref()?;
+        let start = span.start.min(text.len());
+        // The first line of the span: a whole table would hide the caret.
+        let line_end = text[start..].find('\n').map_or(text.len(), |n| start + n);
+        let end = span.end.clamp(start, line_end).max(start);
+        Some(Box::new(std::iter::once(miette::LabeledSpan::at(
+            start..end,
+            "here",
+        ))))
+    }
+}
+
+/// Most bytes of a scene file: scenes are a page of TOML, and a larger
+/// file is refused before it is read.
+pub const MAX_SCENE_BYTES: u64 = 1 << 20;
+
+/// How a scene file is read.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Working type instead of the scene's own `run.number`.
+    pub number: Option<NumberType>,
+    /// Files the scene names (a replayed CSV) must be inside the scene's
+    /// folder: for scenes from untrusted sources.
+    pub confine: bool,
+}
 
 /// A scene read and checked: every value is in range and every model can
 /// be built (the models themselves are built by [`crate::model`]).
@@ -726,14 +765,54 @@ impl Scene {
     /// Reads and checks a scene file, in number type `number` instead of
     /// the scene's own when given (every check then runs in that type).
     pub fn load_as(path: &Path, number: Option<NumberType>) -> Result<Self, SceneError> {
+        Self::load_with(
+            path,
+            LoadOptions {
+                number,
+                confine: false,
+            },
+        )
+    }
+
+    /// Reads and checks a scene file. Only a regular file of at most
+    /// [`MAX_SCENE_BYTES`] is read (a pipe or a device could block or never
+    /// end); the checks come before it is opened.
+    pub fn load_with(path: &Path, options: LoadOptions) -> Result<Self, SceneError> {
+        use std::io::Read;
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+        let fail = |message: String| SceneError {
             file: file.clone(),
             at: None,
-            message: format!("cannot read: {e}"),
+            message,
+            source: None,
+        };
+        let meta = std::fs::metadata(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+        if !meta.is_file() {
+            return Err(fail("not a regular file; a scene is a TOML file".into()));
+        }
+        if meta.len() > MAX_SCENE_BYTES {
+            return Err(fail(format!(
+                "{} bytes, more than the limit of {MAX_SCENE_BYTES} for a scene",
+                meta.len()
+            )));
+        }
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes))
+            .map_err(|e| fail(format!("cannot read: {e}")))?;
+        if bytes.len() as u64 > MAX_SCENE_BYTES {
+            return Err(fail(format!(
+                "more than the limit of {MAX_SCENE_BYTES} bytes for a scene"
+            )));
+        }
+        let text = String::from_utf8(bytes).map_err(|e| {
+            fail(format!(
+                "not UTF-8 text (byte {} is not valid)",
+                e.utf8_error().valid_up_to()
+            ))
         })?;
         let dir = path.parent().unwrap_or(Path::new(""));
-        Self::parse_as(&file, &text, dir, number)
+        Self::parse_with(&file, &text, dir, options)
     }
 
     /// Parses and checks scene text; `file` names it in errors. Files the
@@ -757,10 +836,31 @@ impl Scene {
         dir: &Path,
         number: Option<NumberType>,
     ) -> Result<Self, SceneError> {
+        Self::parse_with(
+            file,
+            text,
+            dir,
+            LoadOptions {
+                number,
+                confine: false,
+            },
+        )
+    }
+
+    /// [`Scene::parse_in`] with [`LoadOptions`].
+    pub fn parse_with(
+        file: &str,
+        text: &str,
+        dir: &Path,
+        options: LoadOptions,
+    ) -> Result<Self, SceneError> {
+        let number = options.number;
+        let shared: std::sync::Arc<str> = text.into();
         let err = |span: Option<Range<usize>>, message: String| SceneError {
             file: file.to_string(),
-            at: span.map(|s| Location::of(text, s.start)),
+            at: span.as_ref().map(|s| Location::of(text, s.start)),
             message,
+            source: span.map(|s| (shared.clone(), s)),
         };
         let raw: SceneFile = toml::from_str(text).map_err(|e| {
             let (span, message) = shape_error(text, &e);
@@ -823,7 +923,7 @@ impl Scene {
         }
 
         let pr_span = raw.profile.span();
-        let profile = crate::profile::resolve(raw.profile.into_inner(), dir)
+        let profile = crate::profile::resolve(raw.profile.into_inner(), dir, options.confine)
             .map_err(|m| err(Some(pr_span.clone()), format!("profile: {m}")))?;
         let steps = crate::profile::steps(&profile, dt)
             .map_err(|m| err(Some(pr_span.clone()), format!("profile: {m}")))?;

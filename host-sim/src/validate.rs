@@ -36,7 +36,7 @@ use crate::scene::{
 };
 
 /// One line of the report.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Check {
     /// Effect name, as in the trace.
     pub effect: String,
@@ -49,7 +49,8 @@ pub struct Check {
 }
 
 /// A comparison, or its absence.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Outcome {
     /// Reference and measured values.
     Compared {
@@ -101,12 +102,31 @@ impl fmt::Display for Check {
 }
 
 /// What `validate` found.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize)]
 pub struct Report {
     /// The profile and the window used.
     pub context: String,
     /// One entry per check.
     pub checks: Vec<Check>,
+    /// Steps the model refused: a run with any is no comparison.
+    pub refused: u32,
+}
+
+/// The relative error `validate` accepts by default: 0.1 %.
+pub const TOLERANCE: f64 = 1e-3;
+
+impl Report {
+    /// The checks whose relative error is beyond `tolerance` in magnitude,
+    /// or not a finite number (a NaN or an infinity never passes).
+    pub fn beyond(&self, tolerance: f64) -> Vec<&Check> {
+        self.checks
+            .iter()
+            .filter(|c| {
+                c.relative_error()
+                    .is_some_and(|e| !(e.is_finite() && e.abs() <= tolerance))
+            })
+            .collect()
+    }
 }
 
 impl fmt::Display for Report {
@@ -251,6 +271,7 @@ fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
     let mut bushing = model::compile::<T>(scene).map_err(|e| e.to_string())?;
     let names = model::effect_names(scene);
     let none = |why: &str| Report {
+        refused: 0,
         context: format!("validate: {why}"),
         checks: names
             .iter()
@@ -328,8 +349,8 @@ fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
     }
     let t0 = start as f64 * scene.dt;
     let kind = match p.kind {
-        Kind::Sine(f) => format!("sine of {} mm at {f} Hz", p.amplitude),
-        Kind::Triangle(v) => format!("triangle of {} mm at {v} mm/s", p.amplitude),
+        Kind::Sine(f) => format!("sine of {:e} mm at {f:e} Hz", p.amplitude),
+        Kind::Triangle(v) => format!("triangle of {:e} mm at {v:e} mm/s", p.amplitude),
     };
     let context = format!(
         "validate: {kind}, {} Hz, {}; steady window: cycles {} to {whole} (t = {t0:.6} s to {:.6} s); {} refused steps",
@@ -359,7 +380,11 @@ fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
             });
         }
     }
-    Ok(Report { context, checks })
+    Ok(Report {
+        context,
+        checks,
+        refused: bushing.refused(),
+    })
 }
 
 struct Ctx<'a> {

@@ -247,7 +247,7 @@ fn validate_a_maxwell_scene_within_half_a_percent() {
     let text = report.to_string();
     let lines: Vec<&str> = text.lines().collect();
     assert!(
-        lines[0].starts_with("validate: sine of 1 mm at 10 Hz"),
+        lines[0].starts_with("validate: sine of 1e0 mm at 1e1 Hz"),
         "{text}"
     );
     assert_eq!(lines.len(), 6, "{text}");

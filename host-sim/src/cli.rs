@@ -1,0 +1,414 @@
+//! The command line of `bushing-sim`, on `clap`.
+//!
+//! Exit codes, the same for every command:
+//!
+//! | code | meaning |
+//! |---|---|
+//! | 0 | success |
+//! | 1 | the run failed (an input or output error, a failed measurement) |
+//! | 2 | usage error, or a scene that cannot be read, checked or built, or whose output would pass `--max-output` |
+//! | 3 | a check failed: `validate` beyond its tolerance, a run with refused steps (without `--allow-refused`), `compare-trace` finding a difference |
+//!
+//! Errors go to stderr; a scene error shows the scene's line with a caret
+//! under the place at fault. With `--json`, `run` and `validate` print
+//! their summary as one JSON object on stdout, and on failure an object
+//! with the error and the exit code.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use bytesize::ByteSize;
+use clap::{Args, Parser, Subcommand};
+
+use crate::output::{OutputError, Staged};
+use crate::run::{self, RunError};
+use crate::scene::{LoadOptions, NumberType, Scene, SceneError};
+use crate::{
+    accuracy_cost, compare, cost, fractional_report, iwan_report, modulus, powertrain, validate,
+    xf_report,
+};
+
+/// Real-time bushing models on the host: run scenes, check them against
+/// closed forms, measure their cost, regenerate the reports.
+#[derive(Debug, Parser)]
+#[command(name = "bushing-sim", version, propagate_version = true)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Simulate a scene: OUT/trace.csv, OUT/modulus.csv and the plots.
+    Run(RunArgs),
+    /// Compare a scene with its closed-form references.
+    Validate(ValidateArgs),
+    /// Cost per step of a scene against the sum of its parts.
+    Cost(CostArgs),
+    /// Complex-modulus error of every Maxwell form.
+    MaxwellTable(TableArgs),
+    /// Saturation of the x_f cell forms against the step.
+    XfTable(TableArgs),
+    /// Iwan discretisations of the STS and Segalman laws.
+    IwanTable(TableArgs),
+    /// Grünwald accuracy, Maxwell fits and their cost.
+    FractionalTable(TableArgs),
+    /// The engine on three 6-DOF mounts (seed 000 §5.2): modes against
+    /// Table 5.2, stop/start transient, plots.
+    Powertrain {
+        /// Output folder (written whole or not at all).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// A firmware's logged forces against a host trace written with
+    /// trace_every = 1: bit-identical, or within N newtons.
+    CompareTrace {
+        /// The host's trace.csv.
+        host_trace: PathBuf,
+        /// The firmware's log.
+        firmware_log: PathBuf,
+        /// Largest difference accepted, N (bit-identical when absent).
+        #[arg(long, value_name = "N")]
+        within: Option<f64>,
+    },
+    /// Error against cost of every kernel (docs/accuracy-cost.md).
+    AccuracyCost {
+        /// `[--quick] --kernels FILE... --elf TRIPLE=PATH... [--peers FILE...] --out DIR`
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// One part of a scene stepped alone (for `cost --instructions`).
+    #[command(hide = true)]
+    CostPart {
+        /// The scene.
+        scene: PathBuf,
+        /// Part index.
+        part: usize,
+        /// Steps.
+        steps: usize,
+    },
+    /// The host kernels stepped alone (for `accuracy-cost`).
+    #[command(hide = true)]
+    AccuracyCostPart {
+        /// Calls per kernel.
+        calls: usize,
+    },
+}
+
+/// How a scene file is read.
+#[derive(Debug, Args)]
+pub struct SceneArgs {
+    /// The scene (TOML, see docs/scenes.md).
+    pub scene: PathBuf,
+    /// Files the scene names (a replayed CSV) must lie inside the scene's
+    /// folder: for scenes from untrusted sources.
+    #[arg(long)]
+    pub confine: bool,
+    /// Working type instead of the scene's own run.number.
+    #[arg(long, value_enum)]
+    pub number: Option<NumberType>,
+}
+
+impl SceneArgs {
+    fn load(&self) -> Result<Scene, CliError> {
+        let options = LoadOptions {
+            number: self.number,
+            confine: self.confine,
+        };
+        Ok(Scene::load_with(&self.scene, options)?)
+    }
+}
+
+/// `run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Output folder: written beside it, then put in its place whole.
+    #[arg(long)]
+    out: PathBuf,
+    /// Succeed even if some steps were refused.
+    #[arg(long)]
+    allow_refused: bool,
+    /// Refuse a run whose output would be larger (e.g. 500MB, 4GiB).
+    #[arg(long, default_value = "1GiB", value_name = "SIZE")]
+    max_output: ByteSize,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+/// `validate`.
+#[derive(Debug, Args)]
+pub struct ValidateArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Largest relative error accepted.
+    #[arg(long, default_value_t = validate::TOLERANCE)]
+    tolerance: f64,
+    /// Print the report as JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+/// `cost`.
+#[derive(Debug, Args)]
+pub struct CostArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Count host instructions with valgrind's callgrind instead of timing.
+    #[arg(long)]
+    instructions: bool,
+}
+
+/// `maxwell-table` and the other reports.
+#[derive(Debug, Args)]
+pub struct TableArgs {
+    /// Write the report to this file instead of stdout.
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+/// Steps per part for `cost --instructions`.
+const INSTRUCTION_STEPS: usize = 200_000;
+
+/// Why a command did not succeed, with its exit code.
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    /// The scene cannot be read or checked.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// A bad argument.
+    #[error("{0}")]
+    Usage(String),
+    /// The run did not complete.
+    #[error(transparent)]
+    Run(#[from] RunError),
+    /// An output file or folder.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    /// Any other failure of the work itself.
+    #[error("{0}")]
+    Failed(String),
+    /// The work completed and a check failed.
+    #[error("{0}")]
+    Check(String),
+}
+
+impl CliError {
+    /// The process exit code.
+    pub fn code(&self) -> u8 {
+        match self {
+            Self::Scene(_) | Self::Usage(_) => 2,
+            Self::Run(RunError::Build(_) | RunError::TooLarge { .. }) => 2,
+            Self::Run(RunError::Output(_)) | Self::Output(_) | Self::Failed(_) => 1,
+            Self::Check(_) => 3,
+        }
+    }
+}
+
+/// Parses the arguments, runs the command and returns its exit code.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let json = match &cli.command {
+        Command::Run(a) => a.json,
+        Command::Validate(a) => a.json,
+        _ => false,
+    };
+    match dispatch(cli.command) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            report(&e);
+            if json {
+                let value = serde_json::json!({
+                    "error": e.to_string(),
+                    "exit_code": e.code(),
+                });
+                println!("{value}");
+            }
+            ExitCode::from(e.code())
+        }
+    }
+}
+
+/// Prints an error on stderr: a scene error with its line and a caret.
+fn report(e: &CliError) {
+    if let CliError::Scene(scene) = e
+        && scene.source.is_some()
+    {
+        let theme = if std::io::stderr().is_terminal() {
+            miette::GraphicalTheme::unicode()
+        } else {
+            miette::GraphicalTheme {
+                characters: miette::ThemeCharacters::ascii(),
+                styles: miette::ThemeStyles::none(),
+            }
+        };
+        let mut text = String::new();
+        let handler = miette::GraphicalReportHandler::new_themed(theme);
+        if handler.render_report(&mut text, scene).is_ok() {
+            // miette's report starts with its own error mark.
+            eprint!("{text}");
+            return;
+        }
+    }
+    eprintln!("error: {e}");
+}
+
+/// Runs one command.
+pub fn dispatch(command: Command) -> Result<(), CliError> {
+    match command {
+        Command::Run(args) => run_command(&args),
+        Command::Validate(args) => validate_command(&args),
+        Command::Cost(args) => {
+            let scene = args.scene.load()?;
+            let text = if args.instructions {
+                cost::cost_instructions(&args.scene.scene, &scene, INSTRUCTION_STEPS)
+                    .map_err(CliError::Failed)?
+                    .to_string()
+            } else {
+                cost::cost(&scene).map_err(CliError::Failed)?.to_string()
+            };
+            print!("{text}");
+            Ok(())
+        }
+        Command::MaxwellTable(a) => table(modulus::table, a.out.as_deref()),
+        Command::XfTable(a) => table(xf_report::table, a.out.as_deref()),
+        Command::IwanTable(a) => table(iwan_report::table, a.out.as_deref()),
+        Command::FractionalTable(a) => table(fractional_report::table, a.out.as_deref()),
+        Command::Powertrain { out } => {
+            let staged = Staged::begin(&out)?;
+            let text = powertrain::report(staged.staging_dir()).map_err(CliError::Failed)?;
+            staged.commit()?;
+            print!("{text}");
+            Ok(())
+        }
+        Command::CompareTrace {
+            host_trace,
+            firmware_log,
+            within,
+        } => {
+            if within.is_some_and(|w| !(w.is_finite() && w >= 0.0)) {
+                return Err(CliError::Usage(
+                    "--within must be a finite number of newtons >= 0".into(),
+                ));
+            }
+            let c = compare::compare_files(&host_trace, &firmware_log, within)
+                .map_err(CliError::Failed)?;
+            print!("{c}");
+            match c.first_mismatch {
+                None => Ok(()),
+                Some(m) => Err(CliError::Check(format!(
+                    "firmware and host differ at {m}"
+                ))),
+            }
+        }
+        Command::AccuracyCost { args } => {
+            let words: Vec<&str> = args.iter().map(String::as_str).collect();
+            print!("{}", accuracy_cost::cli(&words).map_err(CliError::Failed)?);
+            Ok(())
+        }
+        Command::CostPart { scene, part, steps } => {
+            let scene = Scene::load(&scene)?;
+            cost::run_part(&scene, part, steps).map_err(CliError::Failed)
+        }
+        Command::AccuracyCostPart { calls } => {
+            accuracy_cost::host::run_part(calls).map_err(CliError::Failed)
+        }
+    }
+}
+
+fn run_command(args: &RunArgs) -> Result<(), CliError> {
+    let scene = args.scene.load()?;
+    let options = run::Options {
+        progress: !args.json,
+        max_output: args.max_output.as_u64(),
+    };
+    let summary = run::run_with(&scene, &args.out, options)?;
+    if args.json {
+        let value = serde_json::to_string_pretty(&summary)
+            .map_err(|e| CliError::Failed(e.to_string()))?;
+        println!("{value}");
+    } else {
+        print!("{summary}");
+    }
+    if summary.refused > 0 && !args.allow_refused {
+        return Err(CliError::Check(format!(
+            "{} of {} steps were refused (their effect columns in {} are nan); \
+             --allow-refused accepts such a run",
+            summary.refused,
+            summary.steps,
+            args.out.join("trace.csv").display()
+        )));
+    }
+    Ok(())
+}
+
+fn validate_command(args: &ValidateArgs) -> Result<(), CliError> {
+    if !(args.tolerance.is_finite() && args.tolerance >= 0.0) {
+        return Err(CliError::Usage(format!(
+            "--tolerance must be a finite relative error >= 0, got {}",
+            args.tolerance
+        )));
+    }
+    let scene = args.scene.load()?;
+    let report = validate::validate(&scene).map_err(CliError::Failed)?;
+    let beyond = report.beyond(args.tolerance);
+    if args.json {
+        let value = serde_json::json!({
+            "report": report,
+            "tolerance": args.tolerance,
+            "passed": beyond.is_empty() && report.refused == 0,
+        });
+        println!("{value:#}");
+    } else {
+        print!("{report}");
+    }
+    if report.refused > 0 {
+        return Err(CliError::Check(format!(
+            "{} steps were refused: the run is no comparison with the references",
+            report.refused
+        )));
+    }
+    match beyond.as_slice() {
+        [] => Ok(()),
+        worst => Err(CliError::Check(format!(
+            "{} of {} checks beyond the tolerance of {:e}: {}",
+            worst.len(),
+            report.checks.len(),
+            args.tolerance,
+            worst
+                .iter()
+                .map(|c| format!("{}: {}", c.effect, c.what))
+                .collect::<Vec<_>>()
+                .join("; ")
+        ))),
+    }
+}
+
+/// Prints a report, or writes it whole into `out` (a temporary file
+/// beside it, renamed into place).
+fn table(make: fn() -> String, out: Option<&Path>) -> Result<(), CliError> {
+    let text = make();
+    let Some(out) = out else {
+        print!("{text}");
+        return Ok(());
+    };
+    let dir = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let write = || -> std::io::Result<()> {
+        let mut file = tempfile::NamedTempFile::new_in(dir)?;
+        std::io::Write::write_all(&mut file, text.as_bytes())?;
+        file.as_file().sync_all()?;
+        file.persist(out).map_err(|e| e.error)?;
+        Ok(())
+    };
+    write().map_err(OutputError::io(out))?;
+    println!("wrote {}", out.display());
+    Ok(())
+}

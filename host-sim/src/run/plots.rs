@@ -1,0 +1,293 @@
+//! The plots of a run, fed step by step: the force-displacement loop
+//! (every few steps, at most [`PLOT_POINTS`]), the time plots decimated to
+//! the smallest and largest value of each of [`TIME_BUCKETS`] buckets (so
+//! that an oscillation too fast to draw shows as its envelope instead of
+//! aliasing), the dissipated power and energy per effect, and the modulus
+//! probe's points.
+
+use std::path::PathBuf;
+
+use bushing::Real;
+
+use super::RunError;
+use super::pipeline::{Sink, Step};
+use crate::output::Staged;
+use crate::probe::{self, ModulusPoint, ModulusProbe};
+use crate::profile;
+use crate::scene::Scene;
+use crate::svg::{self, Plot, Series};
+
+/// Points kept for the force-displacement plot.
+pub const PLOT_POINTS: u64 = 20_000;
+/// Buckets of the time plots (two points each).
+pub const TIME_BUCKETS: u64 = 4_000;
+
+/// Collects what the plots draw.
+pub struct PlotSink<'a> {
+    scene: &'a Scene,
+    names: &'a [String],
+    oscillator: bool,
+    stride: u64,
+    loop_points: Vec<(f64, f64)>,
+    elastic_points: Vec<(f64, f64)>,
+    force_t: Envelopes,
+    power_t: Envelopes,
+    energy_t: Envelopes,
+    effect_energy: Vec<f64>,
+    energy: f64,
+    peak: f64,
+    probe: ModulusProbe,
+}
+
+impl<'a> PlotSink<'a> {
+    /// A sink for `scene`, whose effects are `names`; `stiffness` is the
+    /// backbone tangent at the start, N/mm (the modulus probe's scale).
+    pub fn new(scene: &'a Scene, names: &'a [String], stiffness: f64) -> Self {
+        let steps = scene.steps();
+        let bucket = steps.div_ceil(TIME_BUCKETS).max(1);
+        Self {
+            scene,
+            names,
+            oscillator: scene.oscillator.is_some(),
+            stride: steps.div_ceil(PLOT_POINTS).max(1),
+            loop_points: Vec::new(),
+            elastic_points: Vec::new(),
+            force_t: Envelopes::new(names.len() + 2, bucket),
+            power_t: Envelopes::new(names.len() + 1, bucket),
+            energy_t: Envelopes::new(names.len() + 1, bucket),
+            effect_energy: vec![0.0; names.len()],
+            energy: 0.0,
+            peak: 0.0,
+            probe: ModulusProbe::new(scene.dt, stiffness).thinned(scene.trace_every),
+        }
+    }
+
+    /// Energy dissipated so far, mJ.
+    pub fn energy(&self) -> f64 {
+        self.energy
+    }
+
+    /// Largest |force| so far, N.
+    pub fn peak(&self) -> f64 {
+        self.peak
+    }
+
+    /// Writes the plots and the modulus points into `out`, returning the
+    /// files written and the modulus points.
+    pub fn write(self, out: &mut Staged) -> Result<(Vec<PathBuf>, Vec<ModulusPoint>, bool), RunError> {
+        let Self {
+            scene,
+            names,
+            loop_points,
+            elastic_points,
+            force_t,
+            power_t,
+            energy_t,
+            probe,
+            ..
+        } = self;
+        let mut files = Vec::new();
+        let mut write = |name: &str, text: String| -> Result<(), RunError> {
+            files.push(out.write(name, text.as_bytes())?);
+            Ok(())
+        };
+        let effects = if names.is_empty() {
+            "backbone only".to_string()
+        } else {
+            names.join(" + ")
+        };
+        let title = |what: &str| {
+            if scene.title.is_empty() {
+                format!("{what} ({effects})")
+            } else {
+                format!("{what}: {}", scene.title)
+            }
+        };
+
+        let loop_plot = Plot {
+            title: if scene.title.is_empty() {
+                format!("Force-displacement ({effects})")
+            } else {
+                scene.title.clone()
+            },
+            x_label: "displacement x [mm]".into(),
+            y_label: "force F [N]".into(),
+            x_log: false,
+            series: vec![
+                Series::line(
+                    format!("total force, {effects}, {}", scene.number.name()),
+                    loop_points,
+                ),
+                Series::line("long-term elastic branch g0 F_inf(x)", elastic_points),
+            ],
+        };
+        write("force-displacement.svg", loop_plot.render())?;
+
+        let mut force_series = force_t.finish().into_iter();
+        let mut series = vec![
+            Series::line("total force", force_series.next().unwrap_or_default()),
+            Series::line(
+                "long-term elastic branch g0 F_inf(x)",
+                force_series.next().unwrap_or_default(),
+            ),
+        ];
+        for (name, points) in names.iter().zip(force_series) {
+            series.push(Series::line(name.clone(), points));
+        }
+        let force_plot = Plot {
+            title: title("Force against time"),
+            x_label: "time t [s]".into(),
+            y_label: "force F [N]".into(),
+            x_log: false,
+            series,
+        };
+        write("force-time.svg", force_plot.render())?;
+
+        let per_effect = |all: Vec<Vec<(f64, f64)>>, total: &str| {
+            let mut it = all.into_iter();
+            let mut series = vec![Series::line(total, it.next().unwrap_or_default())];
+            // With one effect its curve is the total's.
+            if names.len() > 1 {
+                for (name, points) in names.iter().zip(it) {
+                    series.push(Series::line(name.clone(), points));
+                }
+            }
+            series
+        };
+        let power = Plot {
+            title: title("Dissipated power"),
+            x_label: "time t [s]".into(),
+            y_label: "dissipated power P [mW = N·mm/s]".into(),
+            x_log: false,
+            series: per_effect(power_t.finish(), "total, energy of each step / dt"),
+        };
+        let cumulative = Plot {
+            title: title("Cumulative dissipated energy"),
+            x_label: "time t [s]".into(),
+            y_label: "dissipated energy E [mJ = N·mm]".into(),
+            x_log: false,
+            series: per_effect(energy_t.finish(), "total"),
+        };
+        write(
+            "dissipated-power.svg",
+            svg::render_panels(&[power, cumulative]),
+        )?;
+
+        let modulus = probe.finish();
+        let capped = probe.capped();
+        if probe.saw_sine {
+            write("modulus.csv", probe::modulus_csv(&modulus))?;
+            write(
+                "modulus-amplitude.svg",
+                svg::render_panels(&probe::modulus_plots(
+                    &modulus,
+                    &title("Instantaneous complex modulus"),
+                )),
+            )?;
+        }
+        Ok((files, modulus, capped))
+    }
+}
+
+impl<T: Real> Sink<T> for PlotSink<'_> {
+    fn step(&mut self, s: &Step<'_, T>) -> Result<(), RunError> {
+        let t = s.time;
+        let step_energy = s.row.dissipated.to_f64();
+        self.energy += step_energy;
+        let (xf, f, elastic) = (s.row.x.to_f64(), s.row.force.to_f64(), s.row.elastic.to_f64());
+        self.peak = self.peak.max(f.abs());
+        self.force_t.push(0, t, f);
+        self.force_t.push(1, t, elastic);
+        self.power_t.push(0, t, step_energy / self.scene.dt);
+        self.energy_t.push(0, t, self.energy);
+        for (j, e) in s.parts.iter().enumerate() {
+            let (ef, ed) = (e.force.to_f64(), e.dissipated.to_f64());
+            self.force_t.push(j + 2, t, ef);
+            self.power_t.push(j + 1, t, ed / self.scene.dt);
+            if let Some(total) = self.effect_energy.get_mut(j) {
+                *total += ed;
+                self.energy_t.push(j + 1, t, *total);
+            }
+        }
+        if s.index.is_multiple_of(self.stride) {
+            self.loop_points.push((xf, f));
+            self.elastic_points.push((xf, elastic));
+        }
+        // An oscillator's profile is a force: no imposed displacement.
+        let sine = profile::frequency_at(&self.scene.profile, t)
+            .filter(|_| !self.oscillator)
+            .map(|fr| (fr, profile::amplitude_at(&self.scene.profile, t)));
+        self.probe.push(sine, t, xf, f);
+        Ok(())
+    }
+}
+
+/// Time-plot decimation: the smallest and the largest value of each bucket
+/// of `bucket` samples, in time order.
+struct Envelopes {
+    bucket: u64,
+    series: Vec<Envelope>,
+}
+
+#[derive(Default)]
+struct Envelope {
+    count: u64,
+    lo: (f64, f64),
+    hi: (f64, f64),
+    points: Vec<(f64, f64)>,
+}
+
+impl Envelope {
+    fn flush(&mut self) {
+        if self.count == 0 {
+            return;
+        }
+        let (a, b) = if self.lo.0 <= self.hi.0 {
+            (self.lo, self.hi)
+        } else {
+            (self.hi, self.lo)
+        };
+        self.points.push(a);
+        if b != a {
+            self.points.push(b);
+        }
+        self.count = 0;
+    }
+}
+
+impl Envelopes {
+    fn new(n: usize, bucket: u64) -> Self {
+        Self {
+            bucket,
+            series: (0..n).map(|_| Envelope::default()).collect(),
+        }
+    }
+
+    fn push(&mut self, series: usize, t: f64, v: f64) {
+        let Some(e) = self.series.get_mut(series) else {
+            return;
+        };
+        if e.count == 0 {
+            (e.lo, e.hi) = ((t, v), (t, v));
+        } else if v < e.lo.1 {
+            e.lo = (t, v);
+        } else if v > e.hi.1 {
+            e.hi = (t, v);
+        }
+        e.count += 1;
+        if e.count >= self.bucket {
+            e.flush();
+        }
+    }
+
+    fn finish(mut self) -> Vec<Vec<(f64, f64)>> {
+        self.series
+            .iter_mut()
+            .map(|e| {
+                e.flush();
+                std::mem::take(&mut e.points)
+            })
+            .collect()
+    }
+}
+
