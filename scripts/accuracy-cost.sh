@@ -20,17 +20,18 @@
 # printed, never asserted.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+. scripts/target-dir.sh
 
 mode=()
 out=docs
 case "${1:-}" in
-    --quick) mode=(--quick); out=target/accuracy-cost/quick ;;
+    --quick) mode=(--quick); out="$target/accuracy-cost/quick" ;;
     "") ;;
     *) echo "usage: scripts/accuracy-cost.sh [--quick]" >&2; exit 2 ;;
 esac
 [ $# -le 1 ] || { echo "usage: scripts/accuracy-cost.sh [--quick]" >&2; exit 2; }
 
-work=target/accuracy-cost
+work="$target/accuracy-cost"
 mkdir -p "$work" "$out"
 
 kernels=()
@@ -40,7 +41,7 @@ for triple in thumbv7em-none-eabihf thumbv7m-none-eabi; do
     log="$work/kernel-cost-$triple.txt"
     cargo run -q --release -p bushing-boards --target "$triple" --bin kernel-cost >"$log"
     # The ELF that printed these lines (for code sizes and footprint).
-    cp "target/$triple/release/kernel-cost" "$work/kernel-cost-$triple.elf"
+    cp "$target/$triple/release/kernel-cost" "$work/kernel-cost-$triple.elf"
     grep -c '^kernel ' "$log" | sed "s/^/    kernel lines: /"
     kernels+=("$log")
     elfs+=("$triple=$work/kernel-cost-$triple.elf")

@@ -4,7 +4,8 @@
 # viscous, oscillator, six_dof, tracker, fixed_point) for SECONDS each, one
 # after the other, and prints per family the runs libFuzzer made and the
 # result. Exits non-zero if any target failed; the crash input is kept in
-# fuzz/artifacts/<family>/ and the whole log in target/fuzz-families/.
+# fuzz/artifacts/<family>/ and the whole log in fuzz-families/ of cargo's
+# target folder.
 #
 #   scripts/fuzz-families.sh [SECONDS] [FAMILY...]
 #
@@ -35,7 +36,8 @@ fi
 echo "building the fuzz targets"
 cargo fuzz build --sanitizer none
 
-logs=target/fuzz-families
+. scripts/target-dir.sh
+logs="$target/fuzz-families"
 mkdir -p "$logs"
 failed=()
 printf '%-12s %14s %9s  %s\n' family runs seconds result

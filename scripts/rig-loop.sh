@@ -16,11 +16,13 @@
 #      every-model link with `panic-never` on both cores (no panicking
 #      branch left), and the M4F rig loop fails to link when a bounds-checked
 #      index is added on purpose (feature deliberate-panic).
-# Logs and traces go to target/rig-loop/. Needs the Cortex-M targets and
+# Logs and traces go to rig-loop/ in cargo's target folder. Needs the Cortex-M targets and
 # qemu-system-arm (scripts/test.sh installs them).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-out=target/rig-loop
+. scripts/target-dir.sh
+out="$target/rig-loop"
+sim="$target/release/bushing-sim"
 mkdir -p "$out"
 step() { printf '\n==> %s\n' "$*"; }
 summary() { grep -E '^(rig-loop|periods|instructions|memory|tracker|verdict)' "$1"; }
@@ -37,14 +39,14 @@ summary "$out/m3.log"
 
 step "the same scene in bushing-sim, f32 and f64"
 cargo build -q --release -p bushing-sim
-./target/release/bushing-sim run scenes/rig-loop.toml --out "$out/host-f32" >"$out/host-f32.log"
-./target/release/bushing-sim run scenes/rig-loop.toml --out "$out/host-f64" --number f64 >"$out/host-f64.log"
+"$sim" run scenes/rig-loop.toml --out "$out/host-f32" >"$out/host-f32.log"
+"$sim" run scenes/rig-loop.toml --out "$out/host-f64" --number f64 >"$out/host-f64.log"
 
 step "M4F force trace against bushing-sim f32: bit for bit"
-./target/release/bushing-sim compare-trace "$out/host-f32/trace.csv" "$out/m4f.log"
+"$sim" compare-trace "$out/host-f32/trace.csv" "$out/m4f.log"
 
 step "M3 (Q16) force trace against bushing-sim f64: within one DAC step"
-./target/release/bushing-sim compare-trace "$out/host-f64/trace.csv" "$out/m3.log" --within 0.125
+"$sim" compare-trace "$out/host-f64/trace.csv" "$out/m3.log" --within 0.125
 
 step "every model and tracker of the core in QEMU (M4F f32, M3 Q16)"
 for target in thumbv7em-none-eabihf thumbv7m-none-eabi; do

@@ -52,6 +52,9 @@ fi
 qemu-system-arm --version | head -n 1
 valgrind --version
 
+. scripts/target-dir.sh
+echo "cargo builds into $target"
+
 step "format"
 cargo fmt --all -- --check
 
@@ -96,21 +99,21 @@ step "rig-loop firmware in QEMU against bushing-sim, panic-never link check"
 ./scripts/rig-loop.sh
 
 step "fuzz targets build (run them with cargo fuzz: docs/hard-cases.md)"
-cargo check --quiet --manifest-path fuzz/Cargo.toml --target-dir target/fuzz-check
+cargo check --quiet --manifest-path fuzz/Cargo.toml --target-dir "$target/fuzz-check"
 
 step "every scene, with the README's command form (run SCENE --out DIR)"
 cargo build -q -p bushing-sim --release
 find scenes -name '*.toml' | sort | while read -r scene; do
     name=${scene#scenes/}
-    out="target/scenes/${name%.toml}"
+    out="$target/scenes/${name%.toml}"
     mkdir -p "$out"
-    ./target/release/bushing-sim run "$scene" --out "$out" >"$out.log" 2>&1 \
+    "$target/release/bushing-sim" run "$scene" --out "$out" >"$out.log" 2>&1 \
         || { cat "$out.log"; echo "error: $scene failed" >&2; exit 1; }
     printf '%-48s %s\n' "$scene" "$(grep -E '^steps' "$out.log" | tr -s ' ')"
 done
 
 step "powertrain on three 6-DOF mounts: modes, stop/start transient, plots (docs/six-dof.md)"
-./target/release/bushing-sim powertrain --out target/powertrain
+"$target/release/bushing-sim" powertrain --out "$target/powertrain"
 
 step "scene cost against the sum of its parts (host instructions, callgrind)"
 cargo run -q -p bushing-sim --release -- cost --instructions scenes/maxwell4.toml

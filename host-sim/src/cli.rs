@@ -6,7 +6,7 @@
 //! |---|---|
 //! | 0 | success |
 //! | 1 | the run failed (an input or output error, a failed measurement) |
-//! | 2 | usage error, or a scene that cannot be read, checked or built, or whose output would pass `--max-output` |
+//! | 2 | usage error (an `--out` that is a link, a file or a folder of other files among them), or a scene that cannot be read, checked or built, or whose output would pass `--max-output` |
 //! | 3 | a check failed: `validate` beyond its tolerance, a run with refused steps (without `--allow-refused`), `compare-trace` finding a difference |
 //!
 //! Errors go to stderr; a scene error shows the scene's line with a caret
@@ -204,7 +204,12 @@ impl CliError {
         match self {
             Self::Scene(_) | Self::Usage(_) => 2,
             Self::Run(RunError::Build(_) | RunError::TooLarge { .. }) => 2,
-            Self::Run(RunError::Output(_)) | Self::Output(_) | Self::Failed(_) => 1,
+            Self::Run(RunError::Output(e)) | Self::Output(e) => match e {
+                OutputError::Io { .. } => 1,
+                // A link, a file or a folder of other files as --out.
+                _ => 2,
+            },
+            Self::Failed(_) => 1,
             Self::Check(_) => 3,
         }
     }
@@ -301,9 +306,7 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
             print!("{c}");
             match c.first_mismatch {
                 None => Ok(()),
-                Some(m) => Err(CliError::Check(format!(
-                    "firmware and host differ at {m}"
-                ))),
+                Some(m) => Err(CliError::Check(format!("firmware and host differ at {m}"))),
             }
         }
         Command::AccuracyCost { args } => {
@@ -329,8 +332,8 @@ fn run_command(args: &RunArgs) -> Result<(), CliError> {
     };
     let summary = run::run_with(&scene, &args.out, options)?;
     if args.json {
-        let value = serde_json::to_string_pretty(&summary)
-            .map_err(|e| CliError::Failed(e.to_string()))?;
+        let value =
+            serde_json::to_string_pretty(&summary).map_err(|e| CliError::Failed(e.to_string()))?;
         println!("{value}");
     } else {
         print!("{summary}");

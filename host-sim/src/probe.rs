@@ -359,3 +359,62 @@ pub fn modulus_plots(points: &[ModulusPoint], title: &str) -> Vec<Plot> {
         .map(|&m| panel(format!("{title}, mean x {m} mm"), &move |p| mean(p) == m))
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(time_s: f64) -> ModulusPoint {
+        ModulusPoint {
+            time_s,
+            frequency_hz: 1.0,
+            amplitude_mm: 1.0,
+            mean_mm: 0.0,
+            storage: 1.0,
+            loss: 0.1,
+        }
+    }
+
+    #[test]
+    fn points_are_capped_by_halving_their_density_over_the_whole_run() {
+        let dt = 1e-3;
+        let mut probe = ModulusProbe::new(dt, 1.0).thinned(1);
+        let n = 4 * MAX_MODULUS_POINTS;
+        for k in 0..n {
+            probe.keep(point(k as f64 * 2.0 * dt));
+        }
+        let points = probe.finish();
+        assert!(probe.capped());
+        assert!(points.len() <= MAX_MODULUS_POINTS, "{}", points.len());
+        assert!(points.len() >= MAX_MODULUS_POINTS / 2, "{}", points.len());
+        // Still the whole run, evenly: first and last quarter both present.
+        let end = (n - 1) as f64 * 2.0 * dt;
+        assert_eq!(points[0].time_s, 0.0);
+        assert!(points.last().unwrap().time_s > 0.99 * end);
+        let spacing: Vec<f64> = points
+            .windows(2)
+            .map(|w| w[1].time_s - w[0].time_s)
+            .collect();
+        let (lo, hi) = spacing
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(l, h), s| (l.min(*s), h.max(*s)));
+        assert!(hi <= 2.0 * lo + 1e-12, "spacing {lo} to {hi}");
+    }
+
+    #[test]
+    fn thinning_keeps_points_at_least_trace_every_steps_apart() {
+        let dt = 1e-3;
+        let mut probe = ModulusProbe::new(dt, 1.0).thinned(10);
+        for k in 0..1000 {
+            probe.keep(point(k as f64 * 4.0 * dt));
+        }
+        let points = probe.finish();
+        assert!(!probe.capped());
+        assert_eq!(points.len(), 334);
+        assert!(
+            points
+                .windows(2)
+                .all(|w| w[1].time_s - w[0].time_s >= 9.5 * dt)
+        );
+    }
+}

@@ -826,7 +826,11 @@ fn clean(field: &str) -> &str {
 /// other invisible characters escaped (`\u{1b}`), so that a hostile file
 /// cannot write to the terminal through an error.
 fn shown(field: &str) -> String {
-    let mut s: String = field.chars().take(40).flat_map(char::escape_debug).collect();
+    let mut s: String = field
+        .chars()
+        .take(40)
+        .flat_map(char::escape_debug)
+        .collect();
     if field.chars().nth(40).is_some() {
         s.push('…');
     }
@@ -1691,7 +1695,12 @@ mod tests {
                 samples: Vec::new(),
             }
         };
-        let p = resolve(replay(Column::Name("x".into()), None, Some(2.0)), &dir, false).unwrap();
+        let p = resolve(
+            replay(Column::Name("x".into()), None, Some(2.0)),
+            &dir,
+            false,
+        )
+        .unwrap();
         assert_eq!(steps(&p, DT), Ok(500));
         assert_eq!(displacement(&p, 0.25), 1.0);
         // Without the file: no samples.
@@ -1720,7 +1729,12 @@ mod tests {
         assert_eq!(e, "time_column: empty column name");
         let e = resolve(replay(Column::Index(2), None, Some(-1.0)), &dir, false).unwrap_err();
         assert_eq!(e, "rate_hz must be finite and > 0, got -1");
-        let e = resolve(replay(Column::Index(2), None, Some(2.0)), &dir.join("no"), false).unwrap_err();
+        let e = resolve(
+            replay(Column::Index(2), None, Some(2.0)),
+            &dir.join("no"),
+            false,
+        )
+        .unwrap_err();
         assert!(
             e.starts_with("cannot read replay file ") && e.contains("d.csv"),
             "{e}"

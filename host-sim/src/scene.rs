@@ -807,7 +807,7 @@ impl Scene {
         }
         let text = String::from_utf8(bytes).map_err(|e| {
             fail(format!(
-                "not UTF-8 text (byte {} is not valid)",
+                "cannot read: not UTF-8 text (byte {} is not valid)",
                 e.utf8_error().valid_up_to()
             ))
         })?;

@@ -167,10 +167,10 @@ fn a_file_that_cannot_be_read_gives_a_clean_error() {
         "{e}"
     );
 
-    // A directory in place of a file.
+    // A directory in place of a file: refused before it is opened.
     let e = Scene::load(&dir).unwrap_err();
     assert_eq!(e.at, None);
-    assert!(e.message.starts_with("cannot read: "), "{e}");
+    assert!(e.message.starts_with("not a regular file"), "{e}");
 
     // Not UTF-8 text (a scene saved in Latin-1, say).
     let latin1 = dir.join("latin1.toml");

@@ -234,4 +234,3 @@ fn run_typed<T: Real + 'static>(
         files,
     })
 }
-

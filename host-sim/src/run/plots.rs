@@ -74,7 +74,10 @@ impl<'a> PlotSink<'a> {
 
     /// Writes the plots and the modulus points into `out`, returning the
     /// files written and the modulus points.
-    pub fn write(self, out: &mut Staged) -> Result<(Vec<PathBuf>, Vec<ModulusPoint>, bool), RunError> {
+    pub fn write(
+        self,
+        out: &mut Staged,
+    ) -> Result<(Vec<PathBuf>, Vec<ModulusPoint>, bool), RunError> {
         let Self {
             scene,
             names,
@@ -194,7 +197,11 @@ impl<T: Real> Sink<T> for PlotSink<'_> {
         let t = s.time;
         let step_energy = s.row.dissipated.to_f64();
         self.energy += step_energy;
-        let (xf, f, elastic) = (s.row.x.to_f64(), s.row.force.to_f64(), s.row.elastic.to_f64());
+        let (xf, f, elastic) = (
+            s.row.x.to_f64(),
+            s.row.force.to_f64(),
+            s.row.elastic.to_f64(),
+        );
         self.peak = self.peak.max(f.abs());
         self.force_t.push(0, t, f);
         self.force_t.push(1, t, elastic);
@@ -290,4 +297,3 @@ impl Envelopes {
             .collect()
     }
 }
-

@@ -40,9 +40,9 @@ impl Progress {
                 Some(self.total),
                 ProgressDrawTarget::stderr_with_hz(10),
             );
-            if let Ok(style) =
-                ProgressStyle::with_template("[{bar:30}] {percent:>3} % {pos}/{len} steps, {eta} left")
-            {
+            if let Ok(style) = ProgressStyle::with_template(
+                "[{bar:30}] {percent:>3} % {pos}/{len} steps, {eta} left",
+            ) {
                 bar.set_style(style.progress_chars("#>-"));
             }
             self.bar = Some(bar);

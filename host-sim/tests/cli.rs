@@ -1,0 +1,506 @@
+//! The built `bushing-sim` binary as a new user and a careless one would
+//! use it: every case of the command line's contract, with its exit code
+//! (0 success, 1 run failure, 2 usage or scene error, 3 a failed check)
+//! and its message.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use assert_cmd::Command;
+use predicates::prelude::*;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn scene(name: &str) -> PathBuf {
+    root().join("scenes").join(name)
+}
+
+fn sim() -> Command {
+    let mut c = Command::cargo_bin("bushing-sim").unwrap();
+    c.timeout(Duration::from_secs(120));
+    c
+}
+
+/// `scenes/NAME` with `from` replaced by `to`, written into `dir`.
+fn edited(dir: &Path, name: &str, from: &str, to: &str) -> PathBuf {
+    let text = fs::read_to_string(scene(name)).unwrap();
+    assert!(text.contains(from), "{name} has {from}");
+    let path = dir.join(name.replace('/', "-"));
+    fs::write(&path, text.replacen(from, to, 1)).unwrap();
+    path
+}
+
+#[test]
+fn help_and_version_succeed_for_every_command() {
+    sim()
+        .arg("--version")
+        .assert()
+        .code(0)
+        .stdout(predicate::str::starts_with("bushing-sim "));
+    for command in ["run", "validate", "cost", "compare-trace", "maxwell-table"] {
+        sim()
+            .args([command, "--help"])
+            .assert()
+            .code(0)
+            .stdout(predicate::str::contains(format!(
+                "Usage: bushing-sim {command}"
+            )));
+    }
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    sim()
+        .arg("frobnicate")
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("unrecognized subcommand"));
+    sim()
+        .args(["run", "scenes/quickstart.toml"])
+        .current_dir(root())
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--out <OUT>"));
+    sim()
+        .args([
+            "run",
+            "scenes/quickstart.toml",
+            "--out",
+            "x",
+            "--number",
+            "f16",
+        ])
+        .current_dir(root())
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("invalid value 'f16'"));
+    sim()
+        .args(["validate", "scenes/maxwell4.toml", "--tolerance", "nan"])
+        .current_dir(root())
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--tolerance must be a finite"));
+}
+
+#[test]
+fn a_scene_error_shows_its_line_with_a_caret_and_exits_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = edited(
+        dir.path(),
+        "maxwell4.toml",
+        "form = \"rate-exact-ramp\"",
+        "form = \"rate-exact-rump\"",
+    );
+    sim()
+        .arg("run")
+        .arg(&bad)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .assert()
+        .code(2)
+        .stderr(
+            predicate::str::contains("form 'rate-exact-rump' is not one of")
+                .and(predicate::str::contains("[[effects]]"))
+                .and(predicate::str::contains("^^^")),
+        );
+    assert!(
+        !dir.path().join("out").exists(),
+        "no output for a bad scene"
+    );
+}
+
+#[test]
+fn scene_files_that_are_not_regular_or_too_large_are_refused_without_reading() {
+    let dir = tempfile::tempdir().unwrap();
+    #[cfg(unix)]
+    {
+        let fifo = dir.path().join("fifo.toml");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap();
+        assert!(made.success());
+        for args in [&["run", "--out", "unused"][..], &["validate"]] {
+            sim()
+                .args(args)
+                .arg(&fifo)
+                .timeout(Duration::from_secs(10))
+                .assert()
+                .code(2)
+                .stderr(predicate::str::contains("not a regular file"));
+        }
+        sim()
+            .args(["validate", "/dev/zero"])
+            .timeout(Duration::from_secs(10))
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains("not a regular file"));
+    }
+    let big = dir.path().join("big.toml");
+    fs::write(&big, vec![b'#'; 30_000_000]).unwrap();
+    sim()
+        .arg("validate")
+        .arg(&big)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(
+            "30000000 bytes, more than the limit of 1048576",
+        ));
+}
+
+#[test]
+fn a_run_whose_steps_are_refused_exits_3_unless_allowed() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = edited(
+        dir.path(),
+        "profile-sweep.toml",
+        "f_start_hz = 0.5",
+        "f_start_hz = 5e-324",
+    );
+    let huge = edited(
+        dir.path(),
+        "profile-sweep.toml",
+        "amplitude = 0.5 ",
+        "amplitude = 1e308 ",
+    );
+    for s in [&sweep, &huge] {
+        sim()
+            .arg("run")
+            .arg(s)
+            .arg("--out")
+            .arg(dir.path().join("out"))
+            .assert()
+            .code(3)
+            .stderr(predicate::str::contains("steps were refused"));
+    }
+    sim()
+        .arg("run")
+        .arg(&huge)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .arg("--allow-refused")
+        .assert()
+        .code(0)
+        .stdout(predicate::str::contains("refused steps  40000"));
+}
+
+#[test]
+fn validate_exits_3_beyond_its_tolerance_or_with_refused_steps() {
+    sim()
+        .args(["validate", "scenes/maxwell4.toml"])
+        .current_dir(root())
+        .assert()
+        .code(0);
+    sim()
+        .args(["validate", "scenes/maxwell4.toml", "--tolerance", "1e-6"])
+        .current_dir(root())
+        .assert()
+        .code(3)
+        .stderr(predicate::str::contains(
+            "3 of 5 checks beyond the tolerance of 1e-6",
+        ));
+    let dir = tempfile::tempdir().unwrap();
+    let inf = edited(
+        dir.path(),
+        "maxwell4.toml",
+        "amplitude = 1.0",
+        "amplitude = 1e308",
+    );
+    sim()
+        .arg("validate")
+        .arg(&inf)
+        .assert()
+        .code(3)
+        .stderr(predicate::str::contains("8000 steps were refused"));
+}
+
+#[test]
+fn json_summaries_parse() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = sim()
+        .args(["run", "scenes/maxwell4.toml", "--json", "--out"])
+        .arg(dir.path().join("out"))
+        .current_dir(root())
+        .assert()
+        .code(0)
+        .get_output()
+        .stdout
+        .clone();
+    let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(v["steps"], 8000);
+    assert_eq!(v["refused"], 0);
+    assert_eq!(v["number"], "f32");
+    let out = sim()
+        .args(["validate", "scenes/maxwell4.toml", "--json"])
+        .current_dir(root())
+        .assert()
+        .code(0)
+        .get_output()
+        .stdout
+        .clone();
+    let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(v["passed"], true);
+    assert_eq!(v["report"]["checks"].as_array().unwrap().len(), 5);
+    let out = sim()
+        .args(["validate", "no-such-scene.toml", "--json"])
+        .assert()
+        .code(2)
+        .get_output()
+        .stdout
+        .clone();
+    let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(v["exit_code"], 2);
+}
+
+#[test]
+fn an_output_estimated_beyond_the_limit_is_refused_before_stepping() {
+    let dir = tempfile::tempdir().unwrap();
+    // 5 Hz at 1e8 Hz over 20 periods: 4e8 steps, about 50 GB of trace.
+    let fast = edited(
+        dir.path(),
+        "quickstart.toml",
+        "rate_hz = 2000",
+        "rate_hz = 1e8",
+    );
+    let fast_text = fs::read_to_string(&fast)
+        .unwrap()
+        .replacen("cycles = 10", "cycles = 20", 1);
+    fs::write(&fast, fast_text).unwrap();
+    sim()
+        .arg("run")
+        .arg(&fast)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .timeout(Duration::from_secs(20))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("more than the limit of 1.0 GiB"));
+    assert!(!dir.path().join("out").exists());
+    // The limit is the user's: a tiny one refuses the quickstart too.
+    sim()
+        .args([
+            "run",
+            "scenes/quickstart.toml",
+            "--max-output",
+            "1KB",
+            "--out",
+        ])
+        .arg(dir.path().join("out"))
+        .current_dir(root())
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--max-output"));
+}
+
+/// The files of a folder, without the hidden ones.
+fn visible(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.starts_with('.'))
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn a_new_run_replaces_the_old_output_whole_and_follows_no_link() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    sim()
+        .args(["run", "scenes/maxwell4.toml", "--out"])
+        .arg(&out)
+        .current_dir(root())
+        .assert()
+        .code(0);
+    assert!(visible(&out).contains(&"modulus.csv".to_string()));
+    // A planted link where the trace goes: never written through.
+    let victim = dir.path().join("victim.txt");
+    fs::write(&victim, "precious").unwrap();
+    fs::remove_file(out.join("trace.csv")).unwrap();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(&victim, out.join("trace.csv")).unwrap();
+    // A scene without a sine writes no modulus files: the old ones go.
+    sim()
+        .args(["run", "scenes/sts-triangles.toml", "--out"])
+        .arg(&out)
+        .current_dir(root())
+        .assert()
+        .code(0);
+    assert_eq!(fs::read_to_string(&victim).unwrap(), "precious");
+    assert!(!out.join("trace.csv").is_symlink());
+    let names = visible(&out);
+    assert!(!names.contains(&"modulus.csv".to_string()), "{names:?}");
+    assert_eq!(visible(dir.path()), ["out", "victim.txt"]);
+    // The output folder itself as a link, or a folder of other files.
+    #[cfg(unix)]
+    {
+        let link = dir.path().join("link");
+        std::os::unix::fs::symlink(&out, &link).unwrap();
+        sim()
+            .args(["run", "scenes/quickstart.toml", "--out"])
+            .arg(&link)
+            .current_dir(root())
+            .assert()
+            .code(2)
+            .stderr(predicate::str::contains("is a symbolic link"));
+    }
+    let home = dir.path().join("home");
+    fs::create_dir(&home).unwrap();
+    fs::write(home.join("notes.txt"), "mine").unwrap();
+    sim()
+        .args(["run", "scenes/quickstart.toml", "--out"])
+        .arg(&home)
+        .current_dir(root())
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("is not an earlier output"));
+    assert_eq!(visible(&home), ["notes.txt"]);
+}
+
+#[test]
+fn a_killed_run_leaves_the_previous_output_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    sim()
+        .args(["run", "scenes/quickstart.toml", "--out"])
+        .arg(&out)
+        .current_dir(root())
+        .assert()
+        .code(0);
+    let before = fs::read(out.join("trace.csv")).unwrap();
+    // A long run (f64, 4e7 steps, 1 kHz sine... written whole or not at
+    // all), killed by the timeout after a second of stepping.
+    let long = edited(
+        dir.path(),
+        "quickstart.toml",
+        "cycles = 10",
+        "cycles = 100000",
+    );
+    sim()
+        .arg("run")
+        .arg(&long)
+        .args(["--max-output", "100GB", "--out"])
+        .arg(&out)
+        .timeout(Duration::from_secs(1))
+        .assert()
+        .interrupted();
+    assert_eq!(fs::read(out.join("trace.csv")).unwrap(), before);
+    assert_eq!(visible(dir.path()), ["out", "quickstart.toml"]);
+}
+
+#[test]
+fn an_io_error_names_its_file_and_exits_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("plain-file");
+    fs::write(&file, "x").unwrap();
+    sim()
+        .args(["run", "scenes/quickstart.toml", "--out"])
+        .arg(file.join("out"))
+        .current_dir(root())
+        .assert()
+        .code(1)
+        .stderr(predicate::str::contains("plain-file"));
+    sim()
+        .args(["maxwell-table", "--out"])
+        .arg(file.join("table.md"))
+        .assert()
+        .code(1)
+        .stderr(predicate::str::contains("table.md"));
+}
+
+#[test]
+fn a_replay_may_not_leave_the_scene_folder_when_confined() {
+    // scenes/profile-replay.toml reads ../tests/data/replay-displacement.csv.
+    sim()
+        .args(["validate", "scenes/profile-replay.toml"])
+        .current_dir(root())
+        .assert()
+        .code(0);
+    sim()
+        .args(["validate", "--confine", "scenes/profile-replay.toml"])
+        .current_dir(root())
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("outside the scene's folder"));
+}
+
+#[test]
+fn an_error_quotes_a_bad_cell_short_and_escaped() {
+    let dir = tempfile::tempdir().unwrap();
+    let cell = format!("\u{1b}[31m{}", "9".repeat(200));
+    fs::write(
+        dir.path().join("data.csv"),
+        format!("time_s,x_mm\n0,0\n0.01,{cell}\n"),
+    )
+    .unwrap();
+    let text = fs::read_to_string(scene("profile-replay.toml"))
+        .unwrap()
+        .replace("../tests/data/replay-displacement.csv", "data.csv");
+    let path = dir.path().join("replay.toml");
+    fs::write(&path, text).unwrap();
+    let assert = sim().arg("validate").arg(&path).assert().code(2);
+    let stderr = String::from_utf8_lossy(&assert.get_output().stderr).into_owned();
+    assert!(!stderr.contains('\u{1b}'), "no raw escape: {stderr:?}");
+    assert!(stderr.contains("\\u{1b}[31m"), "{stderr}");
+    assert!(!stderr.contains(&"9".repeat(60)), "short excerpt: {stderr}");
+}
+
+#[test]
+fn modulus_points_are_thinned_like_the_trace() {
+    let dir = tempfile::tempdir().unwrap();
+    // 200 Hz at 2 kHz: a point per 10-step period, unless thinned.
+    let fast = edited(
+        dir.path(),
+        "quickstart.toml",
+        "frequency_hz = 5.0",
+        "frequency_hz = 200.0",
+    );
+    let text = fs::read_to_string(&fast)
+        .unwrap()
+        .replacen("cycles = 10", "cycles = 400", 1)
+        + "\n[output]\ntrace_every = 100\n";
+    fs::write(&fast, text).unwrap();
+    let out = dir.path().join("out");
+    sim()
+        .arg("run")
+        .arg(&fast)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(0);
+    let trace_rows = fs::read_to_string(out.join("trace.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    let points = fs::read_to_string(out.join("modulus.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    assert_eq!(trace_rows, 40);
+    assert!(
+        (30..=40).contains(&points),
+        "{points} modulus points for {trace_rows} trace rows"
+    );
+}
+
+#[test]
+fn the_scripts_find_the_build_where_cargo_puts_it() {
+    let elsewhere = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new("bash")
+        .args(["-c", ". scripts/target-dir.sh && printf %s \"$target\""])
+        .current_dir(root())
+        .env("CARGO_TARGET_DIR", elsewhere.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        Path::new(&String::from_utf8(out.stdout).unwrap()),
+        elsewhere.path()
+    );
+}
