@@ -8,7 +8,11 @@
 //! modulus of the Maxwell forms against the closed form.
 #![forbid(unsafe_code)]
 
+#[macro_use]
+mod tagged;
+
 pub mod accuracy_cost;
+pub mod backbone;
 pub mod cli;
 pub mod compare;
 pub mod cost;

@@ -7,55 +7,14 @@ use bushing::maxwell::{self, MaxwellCell};
 use bushing::xf::{self, XfCell};
 use bushing::{
     Accumulator, Backbone, Berg, BoucWen, Bushing, BushingState, Compensated, Dahl, Drive, Effect,
-    EffectOutput, IwanCellSpec, KfTable, MaxwellForm, MaxwellSpec, MonotoneSpline, Multiplied,
-    Oscillator, OscillatorState, ParamError, Plain, Polynomial, Real, Sts, TurningPoints, XfForm,
-    XfSpec,
+    EffectOutput, IwanCellSpec, KfTable, MaxwellForm, MaxwellSpec, Multiplied, Oscillator,
+    OscillatorState, ParamError, Plain, Real, Sts, TurningPoints, XfForm, XfSpec,
 };
 
+pub use crate::backbone::{AnyBackbone, MAX_COEFFICIENTS, MAX_POINTS, backbone};
 use crate::scene::{
-    BackboneSpec, Effect as EffectDesc, Friction, Law, STACK_DEPTH, Scene, Storage, TABLE_POINTS,
+    Effect as EffectDesc, Friction, Law, STACK_DEPTH, Scene, Storage, TABLE_POINTS,
 };
-
-/// Most polynomial coefficients a scene may give.
-pub const MAX_COEFFICIENTS: usize = 8;
-/// Most spline points a scene may give.
-pub const MAX_POINTS: usize = 256;
-
-/// A backbone chosen at run time.
-#[derive(Debug, Clone)]
-pub enum AnyBackbone<T> {
-    /// Polynomial.
-    Polynomial(Polynomial<T, MAX_COEFFICIENTS>),
-    /// Monotone spline.
-    Spline(Box<MonotoneSpline<T, MAX_POINTS>>),
-}
-
-impl<T: Real> Backbone<T> for AnyBackbone<T> {
-    #[inline]
-    fn eval(&self, x: T) -> (T, T) {
-        match self {
-            Self::Polynomial(p) => p.eval(x),
-            Self::Spline(s) => s.eval(x),
-        }
-    }
-}
-
-/// Builds the backbone of a scene.
-pub fn backbone<T: Real>(spec: &BackboneSpec) -> Result<AnyBackbone<T>, ParamError> {
-    let b = match spec {
-        BackboneSpec::Polynomial {
-            coefficients,
-            range,
-        } => AnyBackbone::Polynomial(Polynomial::new(coefficients, (range[0], range[1]))?),
-        BackboneSpec::Spline { x, force } => {
-            AnyBackbone::Spline(Box::new(MonotoneSpline::new(x, force)?))
-        }
-    };
-    // What a bushing asks of its backbone (its rest point within the
-    // guard), checked where the scene is read rather than when it is built.
-    Bushing::new(b.clone(), ())?;
-    Ok(b)
-}
 
 /// A Maxwell bank sized at run time; the scheme is the core's
 /// [`maxwell::step_cells`], the same code the const-size bank runs.

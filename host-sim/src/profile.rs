@@ -31,7 +31,148 @@ use bushing::excitation::{Sweep, sin_cycles};
 use serde::Deserialize;
 use serde::de::{self, Visitor};
 
-use crate::scene::ProfileSpec;
+tagged_table! {
+    /// `[profile]`: the imposed displacement x(t) in mm. The formulas, the
+    /// defaults and the bounds of each profile are in this module and
+    /// `docs/scenes.md`.
+    #[derive(Debug, Clone, PartialEq, Deserialize)]
+    pub enum ProfileSpec, read by tag as ProfileByTag("ProfileSpec") {
+        /// x = preload + amplitude sin(2π f t).
+        Sine {
+            /// Amplitude in mm.
+            amplitude: f64,
+            /// Frequency in Hz.
+            frequency_hz: f64,
+            /// Number of cycles.
+            cycles: f64,
+            /// Static offset in mm.
+            #[serde(default)]
+            preload: f64,
+        },
+        /// Triangle between preload ± amplitude at constant speed, starting
+        /// upward from the preload.
+        Triangle {
+            /// Amplitude in mm.
+            amplitude: f64,
+            /// Speed in mm/s.
+            speed: f64,
+            /// Number of cycles.
+            cycles: f64,
+            /// Static offset in mm.
+            #[serde(default)]
+            preload: f64,
+        },
+        /// Multi-step relaxation (seed 000 §3.2.3, Table B.2): from `preload`,
+        /// a linear ramp of `ramp_s` to each level in turn, each held `hold_s`.
+        MultiStep {
+            /// Levels in mm, in the order they are reached.
+            levels: Vec<f64>,
+            /// Duration of each ramp in s (> 0; the thesis uses 20 s).
+            ramp_s: f64,
+            /// Hold at each level in s (>= 0; the thesis uses 360 s or 3600 s).
+            hold_s: f64,
+            /// Starting level in mm (the bushing starts relaxed there).
+            #[serde(default)]
+            preload: f64,
+        },
+        /// Stepped sines (seed 000 Fig. 3.3, Table B.2): at each preload, for
+        /// each frequency, a step of whole `cycles` at each amplitude in turn,
+        /// each step starting and ending at the preload with zero phase.
+        SteppedSine {
+            /// A single preload in mm (default 0); not with `preloads`.
+            #[serde(default)]
+            preload: Option<f64>,
+            /// Several preloads in mm, visited in order; not with `preload`.
+            #[serde(default)]
+            preloads: Option<Vec<f64>>,
+            /// Frequencies in Hz, outer loop at each preload.
+            frequencies_hz: Vec<f64>,
+            /// Amplitudes in mm, inner loop.
+            amplitudes: Vec<f64>,
+            /// Whole number of cycles per step.
+            cycles: f64,
+            /// Rest at the preload after each step, in s; not with
+            /// `settle_cycles`.
+            #[serde(default)]
+            settle_s: Option<f64>,
+            /// Rest at the preload after each step, in periods of that step's
+            /// frequency; not with `settle_s`.
+            #[serde(default)]
+            settle_cycles: Option<f64>,
+            /// Ramp between preloads in s (needed with two or more preloads).
+            #[serde(default)]
+            ramp_s: Option<f64>,
+            /// Hold after each preload change in s (default 0).
+            #[serde(default)]
+            hold_s: Option<f64>,
+        },
+        /// Sine sweep, phase-continuous: x = preload + amplitude sin(φ(t)) with
+        /// φ the integral of 2π f(t), f linear or logarithmic in time from
+        /// `f_start_hz` to `f_end_hz` over `duration_s`.
+        Sweep {
+            /// Amplitude in mm.
+            amplitude: f64,
+            /// Frequency at t = 0 in Hz.
+            f_start_hz: f64,
+            /// Frequency at t = duration_s in Hz.
+            f_end_hz: f64,
+            /// Duration in s.
+            duration_s: f64,
+            /// Frequency law: "log" (default) or "linear".
+            #[serde(default)]
+            spacing: Spacing,
+            /// Static offset in mm.
+            #[serde(default)]
+            preload: f64,
+        },
+        /// Stop/start transient, a displacement proxy of seed 000 §5.2.4: each
+        /// event is the response of one mode (`frequency_hz`, `damping`) to a
+        /// load ramped over `rise_s` whose static displacement is the event's
+        /// `size`.
+        StopStart {
+            /// Frequency of the mode that rings, in Hz (undamped).
+            frequency_hz: f64,
+            /// Damping ratio ζ in [0, 1).
+            damping: f64,
+            /// Rise time of each load change in s (0 for a step).
+            rise_s: f64,
+            /// Duration in s.
+            duration_s: f64,
+            /// The events, in time order.
+            events: Vec<StopStartEvent>,
+            /// Static offset in mm before the first event.
+            #[serde(default)]
+            preload: f64,
+        },
+        /// A constant input: x held at `preload` (in an oscillator scene,
+        /// a constant force: 0 gives a free decay).
+        Hold {
+            /// Duration in s.
+            duration_s: f64,
+            /// The held value, mm (N in an oscillator scene).
+            #[serde(default)]
+            preload: f64,
+        },
+        /// Replay of a measured displacement from a CSV file, linearly
+        /// interpolated onto the scene's step.
+        Replay {
+            /// CSV file, relative to the scene file's directory.
+            file: String,
+            /// Displacement column: a header name or a 1-based index.
+            column: crate::profile::Column,
+            /// Time column in s (name or 1-based index); not with `rate_hz`.
+            #[serde(default)]
+            time_column: Option<crate::profile::Column>,
+            /// Sampling rate of the file in Hz; not with `time_column`.
+            #[serde(default)]
+            rate_hz: Option<f64>,
+            /// The samples (time from the first sample in s, displacement in
+            /// mm), read from `file` when the scene is loaded.
+            #[serde(skip)]
+            samples: Vec<(f64, f64)>,
+        },
+    }
+}
 
 /// Most entries of a list (levels, preloads, frequencies, amplitudes).
 pub const MAX_LIST: usize = 10_000;

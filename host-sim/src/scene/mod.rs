@@ -1,0 +1,485 @@
+//! Scene files: what to simulate, at which rate and in which number type,
+//! under which displacement profile. See `docs/scenes.md`.
+//!
+//! Parsing is two-staged: TOML into plain structs (syntax and shape errors
+//! carry the line and column), then validation into model parameters
+//! (parameter errors name the effect, the parameter and the bound, at the
+//! line of the effect's table).
+
+mod check;
+mod errors;
+mod spec;
+#[cfg(test)]
+mod tests;
+
+use std::ops::Range;
+use std::path::Path;
+
+use bushing::{
+    Backbone, FirstLoading, IwanCellSpec, MaxwellForm, MaxwellSpec, ParamError, XfForm, XfSpec,
+};
+
+pub use crate::backbone::BackboneSpec;
+pub use crate::profile::ProfileSpec;
+pub use errors::{Location, SceneError};
+pub use spec::*;
+
+use check::validate_effect;
+use errors::shape_error;
+
+/// Most bytes of a scene file: scenes are a page of TOML, and a larger
+/// file is refused before it is read.
+pub const MAX_SCENE_BYTES: u64 = 1 << 20;
+
+/// How a scene file is read.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Working type instead of the scene's own `run.number`.
+    pub number: Option<NumberType>,
+    /// Files the scene names (a replayed CSV) must be inside the scene's
+    /// folder: for scenes from untrusted sources.
+    pub confine: bool,
+}
+
+/// A scene read and checked: every value is in range and every model can
+/// be built (the models themselves are built by the `model` module).
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// Title.
+    pub title: String,
+    /// Time step in s.
+    pub dt: f64,
+    /// Working type.
+    pub number: NumberType,
+    /// Backbone.
+    pub backbone: BackboneSpec,
+    /// Effects, validated.
+    pub effects: Vec<Effect>,
+    /// Profile.
+    pub profile: ProfileSpec,
+    /// Steps between two rows of `trace.csv` (1: every step).
+    pub trace_every: u64,
+    /// A unit mass on the bushing, driven by the profile as a force.
+    pub oscillator: Option<OscillatorSpec>,
+    /// The ADC the model reads the imposed displacement through (never in
+    /// an oscillator scene).
+    pub adc: Option<Adc>,
+}
+
+/// How the cells of a Maxwell bank store their state (the core's
+/// accumulators).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Storage {
+    /// `F - d F`, one word ([`bushing::Plain`]): slow cells keep their rate.
+    Plain,
+    /// `e^-h F`, one word ([`bushing::Multiplied`]): for cells not slow.
+    Multiplied,
+    /// Fast2Sum, two words ([`bushing::Compensated`]): slow cells in f32.
+    Compensated,
+}
+
+impl Storage {
+    /// Parses the scene's `state` value.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "plain" => Some(Self::Plain),
+            "multiplied" => Some(Self::Multiplied),
+            "compensated" => Some(Self::Compensated),
+            _ => None,
+        }
+    }
+
+    /// The scene's name of the storage.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Plain => "plain",
+            Self::Multiplied => "multiplied",
+            Self::Compensated => "compensated",
+        }
+    }
+}
+
+/// A validated effect.
+#[derive(Debug, Clone)]
+pub enum Effect {
+    /// A Maxwell bank.
+    Maxwell {
+        /// Form.
+        form: MaxwellForm,
+        /// How each cell stores its state.
+        storage: Storage,
+        /// Cells (ω in rad/s).
+        cells: Vec<MaxwellSpec>,
+    },
+    /// An Iwan bank.
+    Iwan {
+        /// Slider form (else clamp form).
+        slider: bool,
+        /// Reference stiffness (N/mm).
+        k_ref: f64,
+        /// Cells.
+        cells: Vec<IwanCellSpec>,
+    },
+    /// A turning-point stack model.
+    TurningPoints {
+        /// The law.
+        law: Law,
+        /// First loading rule.
+        first_loading: FirstLoading,
+    },
+    /// An x_f bank.
+    Xf {
+        /// Form.
+        form: XfForm,
+        /// Cells (ω in rad/s).
+        cells: Vec<XfSpec>,
+    },
+    /// A single friction cell.
+    Friction(Friction),
+}
+
+/// A validated single friction cell (parameters in f64; the model is built
+/// in the run's number type).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Friction {
+    /// Dahl (eq 1.43).
+    Dahl(DahlParams),
+    /// Bouc-Wen (eq 1.44).
+    BoucWen(BoucWenParams),
+    /// Berg (eq 1.45).
+    Berg(BergParams),
+}
+
+impl Effect {
+    /// Name for reports and trace columns.
+    pub fn name(&self) -> String {
+        match self {
+            Self::Maxwell { form, cells, .. } => {
+                format!("maxwell {} x{}", form.name(), cells.len())
+            }
+            Self::Iwan { slider, cells, .. } => {
+                let form = if *slider { "slider" } else { "clamp" };
+                format!("iwan {form} x{}", cells.len())
+            }
+            Self::TurningPoints { law, .. } => match law {
+                Law::Sts { .. } => "turning-points sts".into(),
+                Law::Table { d, .. } => format!("turning-points table x{}", d.len()),
+            },
+            Self::Xf { form, cells } => format!("xf {} x{}", form.name(), cells.len()),
+            Self::Friction(Friction::Dahl(p)) => format!("dahl alpha={}", p.alpha),
+            Self::Friction(Friction::BoucWen(p)) => format!("bouc-wen n={}", p.n),
+            Self::Friction(Friction::Berg(_)) => "berg".into(),
+        }
+    }
+
+    /// Sum of the load fractions of the effect's cells.
+    pub fn fraction(&self) -> f64 {
+        match self {
+            Self::Maxwell { cells, .. } => cells.iter().map(|c| c.g).sum(),
+            Self::Iwan { cells, .. } => cells.iter().map(|c| c.g).sum(),
+            Self::Xf { cells, .. } => cells.iter().map(|c| c.g).sum(),
+            Self::TurningPoints { .. } | Self::Friction(_) => 0.0,
+        }
+    }
+}
+
+/// A hysteretic relaxation law, validated.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Law {
+    /// Continuous STS.
+    Sts {
+        /// C in N²/mm.
+        c: f64,
+        /// K_1 in N/mm.
+        k1: f64,
+    },
+    /// Measured K_f(d).
+    Table {
+        /// Distances, mm.
+        d: Vec<f64>,
+        /// K_f, N/mm.
+        k: Vec<f64>,
+    },
+}
+
+/// Turning points a scene's stack model holds.
+pub const STACK_DEPTH: usize = 32;
+/// Points a scene's K_f table may hold.
+pub const TABLE_POINTS: usize = 64;
+
+/// Largest bank a scene may ask for.
+pub const MAX_CELLS: usize = 64;
+/// Largest number of steps a scene may ask for.
+pub const MAX_STEPS: u64 = 2_000_000_000;
+
+impl Scene {
+    /// Reads and checks a scene file.
+    pub fn load(path: &Path) -> Result<Self, SceneError> {
+        Self::load_as(path, None)
+    }
+
+    /// Reads and checks a scene file, in number type `number` instead of
+    /// the scene's own when given (every check then runs in that type).
+    pub fn load_as(path: &Path, number: Option<NumberType>) -> Result<Self, SceneError> {
+        Self::load_with(
+            path,
+            LoadOptions {
+                number,
+                confine: false,
+            },
+        )
+    }
+
+    /// Reads and checks a scene file. Only a regular file of at most
+    /// [`MAX_SCENE_BYTES`] is read (a pipe or a device could block or never
+    /// end); the checks come before it is opened.
+    pub fn load_with(path: &Path, options: LoadOptions) -> Result<Self, SceneError> {
+        use std::io::Read;
+        let file = path.display().to_string();
+        let fail = |message: String| SceneError {
+            file: file.clone(),
+            at: None,
+            message,
+            source: None,
+        };
+        let meta = std::fs::metadata(path).map_err(|e| fail(format!("cannot read: {e}")))?;
+        if !meta.is_file() {
+            return Err(fail("not a regular file; a scene is a TOML file".into()));
+        }
+        if meta.len() > MAX_SCENE_BYTES {
+            return Err(fail(format!(
+                "{} bytes, more than the limit of {MAX_SCENE_BYTES} for a scene",
+                meta.len()
+            )));
+        }
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes))
+            .map_err(|e| fail(format!("cannot read: {e}")))?;
+        if bytes.len() as u64 > MAX_SCENE_BYTES {
+            return Err(fail(format!(
+                "more than the limit of {MAX_SCENE_BYTES} bytes for a scene"
+            )));
+        }
+        let text = String::from_utf8(bytes).map_err(|e| {
+            fail(format!(
+                "cannot read: not UTF-8 text (byte {} is not valid)",
+                e.utf8_error().valid_up_to()
+            ))
+        })?;
+        let dir = path.parent().unwrap_or(Path::new(""));
+        Self::parse_with(&file, &text, dir, options)
+    }
+
+    /// Parses and checks scene text; `file` names it in errors. Files the
+    /// scene refers to (a replayed CSV) are found relative to the current
+    /// directory; see [`Scene::parse_in`].
+    pub fn parse(file: &str, text: &str) -> Result<Self, SceneError> {
+        Self::parse_in(file, text, Path::new(""))
+    }
+
+    /// Parses and checks scene text whose relative file names are relative
+    /// to `dir` (the scene file's directory when loaded from a file).
+    pub fn parse_in(file: &str, text: &str, dir: &Path) -> Result<Self, SceneError> {
+        Self::parse_as(file, text, dir, None)
+    }
+
+    /// [`Scene::parse_in`], in number type `number` instead of the scene's
+    /// own `run.number` when given.
+    pub fn parse_as(
+        file: &str,
+        text: &str,
+        dir: &Path,
+        number: Option<NumberType>,
+    ) -> Result<Self, SceneError> {
+        Self::parse_with(
+            file,
+            text,
+            dir,
+            LoadOptions {
+                number,
+                confine: false,
+            },
+        )
+    }
+
+    /// [`Scene::parse_in`] with [`LoadOptions`].
+    pub fn parse_with(
+        file: &str,
+        text: &str,
+        dir: &Path,
+        options: LoadOptions,
+    ) -> Result<Self, SceneError> {
+        let number = options.number;
+        let shared: std::sync::Arc<str> = text.into();
+        let err = |span: Option<Range<usize>>, message: String| SceneError {
+            file: file.to_string(),
+            at: span.as_ref().map(|s| Location::of(text, s.start)),
+            message,
+            source: span.map(|s| (shared.clone(), s)),
+        };
+        let raw: SceneFile = toml::from_str(text).map_err(|e| {
+            let (span, message) = shape_error(text, &e);
+            err(span, message)
+        })?;
+
+        let run_span = raw.run.span();
+        let mut run = raw.run.into_inner();
+        if let Some(number) = number {
+            run.number = number;
+        }
+        if !(run.rate_hz.is_finite() && run.rate_hz > 0.0 && run.rate_hz <= 1e9) {
+            return Err(err(
+                Some(run_span),
+                format!("run.rate_hz must be in (0, 1e9] Hz, got {}", run.rate_hz),
+            ));
+        }
+        let dt = 1.0 / run.rate_hz;
+
+        let bb_span = raw.backbone.span();
+        let backbone = raw.backbone.into_inner();
+        // The reference stiffness of Iwan cells given by slip distance.
+        let k_at_rest = crate::backbone::backbone::<f64>(&backbone)
+            .map_err(|e| err(Some(bb_span.clone()), format!("backbone: {e}")))?
+            .eval(0.0)
+            .1;
+        // The same checks in the working type, where a value valid in f64
+        // may overflow or vanish.
+        if run.number == NumberType::F32 {
+            crate::backbone::backbone::<f32>(&backbone)
+                .map_err(|e| err(Some(bb_span.clone()), format!("backbone (f32): {e}")))?;
+        }
+
+        let mut effects = Vec::new();
+        let mut seen = Vec::new();
+        for (i, spanned) in raw.effects.into_iter().enumerate() {
+            let span = spanned.span();
+            let spec = spanned.into_inner();
+            let kind = spec.kind();
+            if seen.contains(&kind) {
+                return Err(err(
+                    Some(span),
+                    format!(
+                        "effects[{i}]: a second '{kind}' effect; put all its cells in one table"
+                    ),
+                ));
+            }
+            seen.push(kind);
+            let checked = match run.number {
+                NumberType::F32 => validate_effect::<f32>(spec, dt, k_at_rest),
+                NumberType::F64 => validate_effect::<f64>(spec, dt, k_at_rest),
+            };
+            let effect = checked
+                .map_err(|m| err(Some(span.clone()), format!("effects[{i}] ({kind}): {m}")))?;
+            effects.push(effect);
+        }
+        let sum: f64 = effects.iter().map(Effect::fraction).sum();
+        if sum > 1.0 + 1e-12 {
+            return Err(err(None, ParamError::FractionsAboveOne { sum }.to_string()));
+        }
+
+        let pr_span = raw.profile.span();
+        let profile = crate::profile::resolve(raw.profile.into_inner(), dir, options.confine)
+            .map_err(|m| err(Some(pr_span.clone()), format!("profile: {m}")))?;
+        let steps = crate::profile::steps(&profile, dt)
+            .map_err(|m| err(Some(pr_span.clone()), format!("profile: {m}")))?;
+        if steps > MAX_STEPS {
+            return Err(err(
+                Some(pr_span),
+                format!("profile: {steps} steps, more than the limit of {MAX_STEPS}"),
+            ));
+        }
+        let trace_every = match raw.output {
+            None => 1,
+            Some(o) => {
+                let span = o.span();
+                let every = o.into_inner().trace_every;
+                u64::try_from(every)
+                    .ok()
+                    .filter(|&n| n >= 1)
+                    .ok_or_else(|| {
+                        err(
+                            Some(span),
+                            format!("output.trace_every must be a whole number >= 1, got {every}"),
+                        )
+                    })?
+            }
+        };
+        let oscillator = match raw.oscillator {
+            None => None,
+            Some(o) => {
+                let span = o.span();
+                let o = o.into_inner();
+                let bad = |m: String| err(Some(span.clone()), format!("oscillator.{m}"));
+                for (name, v) in [("p0", o.p0), ("v0", o.v0)] {
+                    if !v.is_finite() {
+                        return Err(bad(format!("{name} must be finite, got {v}")));
+                    }
+                }
+                Some(o)
+            }
+        };
+        let adc = match raw.adc {
+            None => None,
+            Some(a) => {
+                let span = a.span();
+                let a = a.into_inner();
+                let bad = |m: String| err(Some(span.clone()), format!("adc.{m}"));
+                if oscillator.is_some() {
+                    return Err(err(
+                        Some(span),
+                        "adc: an [oscillator] scene's profile is a force, not a displacement \
+                         read by an ADC: remove [adc] or [oscillator]"
+                            .into(),
+                    ));
+                }
+                if !(a.lsb_mm.is_finite() && a.lsb_mm > 0.0) {
+                    return Err(bad(format!(
+                        "lsb_mm must be finite and > 0 mm, got {}",
+                        a.lsb_mm
+                    )));
+                }
+                let bits = u32::try_from(a.bits)
+                    .ok()
+                    .filter(|b| (2..=MAX_ADC_BITS).contains(b))
+                    .ok_or_else(|| {
+                        bad(format!(
+                            "bits must be a whole number from 2 to {MAX_ADC_BITS}, got {}",
+                            a.bits
+                        ))
+                    })?;
+                Some(Adc {
+                    lsb_mm: a.lsb_mm,
+                    bits,
+                })
+            }
+        };
+        Ok(Self {
+            title: raw.title,
+            dt,
+            number: run.number,
+            backbone,
+            effects,
+            profile,
+            trace_every,
+            oscillator,
+            adc,
+        })
+    }
+
+    /// Number of steps the profile takes.
+    pub fn steps(&self) -> u64 {
+        crate::profile::steps(&self.profile, self.dt).unwrap_or(0)
+    }
+
+    /// The input of the model at time `t` (s): the profile's displacement
+    /// in mm, as the `[adc]` reads it when there is one (`code * lsb_mm`,
+    /// in f64), or in an oscillator scene the applied force in N.
+    pub fn input(&self, t: f64) -> f64 {
+        let x = crate::profile::displacement(&self.profile, t);
+        match self.adc {
+            Some(adc) => adc.read(x),
+            None => x,
+        }
+    }
+}
