@@ -31,6 +31,7 @@ use std::fmt;
 use bushing::{BoucWen, KfTable, MaxwellBank, MaxwellForm, MaxwellSpec, Real, Relaxation, Sts};
 
 use crate::model;
+use crate::profile::{Sine, Triangle};
 use crate::scene::{
     BackboneSpec, Effect, Friction, Law, NumberType, ProfileSpec, Scene, TABLE_POINTS,
 };
@@ -167,11 +168,11 @@ enum Kind {
 }
 
 fn periodic(p: &ProfileSpec) -> Option<Periodic> {
-    if let ProfileSpec::Sine {
+    if let ProfileSpec::Sine(Sine {
         amplitude,
         frequency_hz,
         ..
-    } = p
+    }) = p
     {
         return Some(Periodic {
             amplitude: *amplitude,
@@ -179,9 +180,9 @@ fn periodic(p: &ProfileSpec) -> Option<Periodic> {
             kind: Kind::Sine(*frequency_hz),
         });
     }
-    if let ProfileSpec::Triangle {
+    if let ProfileSpec::Triangle(Triangle {
         amplitude, speed, ..
-    } = p
+    }) = p
     {
         return Some(Periodic {
             amplitude: *amplitude,
