@@ -201,12 +201,13 @@ pub(super) enum Time<'a> {
     Rate(f64),
 }
 
-/// A field without surrounding blanks and double quotes.
+/// A field without the double quotes the `csv` reader leaves when blanks
+/// come before them (`a, "b"`).
 fn clean(field: &str) -> &str {
-    let f = field.trim();
-    f.strip_prefix('"')
+    field
+        .strip_prefix('"')
         .and_then(|g| g.strip_suffix('"'))
-        .unwrap_or(f)
+        .unwrap_or(field)
         .trim()
 }
 
@@ -235,13 +236,14 @@ fn num(v: f64) -> String {
     }
 }
 
-/// Reads (time, displacement) samples from CSV text; `name` names the file
-/// in errors, whose rows are the file's lines counted from 1.
+/// Reads (time, displacement) samples from CSV text with the `csv` crate;
+/// `name` names the file in errors, whose rows are the file's lines counted
+/// from 1.
 ///
 /// Fields are separated by commas, or by semicolons or tabs when the first
-/// row has no comma; blank lines and lines starting with `#` are skipped;
-/// the first row is a header when one of its fields is not a number. Times
-/// must increase strictly and are shifted to start at 0.
+/// row has no comma, and may be quoted; blank lines and lines starting with
+/// `#` are skipped; the first row is a header when one of its fields is not
+/// a number. Times must increase strictly and are shifted to start at 0.
 pub(super) fn read_csv(
     name: &str,
     text: &str,
@@ -249,24 +251,36 @@ pub(super) fn read_csv(
     time: Time<'_>,
 ) -> Result<Vec<(f64, f64)>, String> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut rows = text.lines().enumerate().filter_map(|(i, l)| {
-        let t = l.trim();
-        (!t.is_empty() && !t.starts_with('#')).then_some((i + 1, l))
+    let first_text = text
+        .lines()
+        .map(str::trim)
+        .find(|t| !t.is_empty() && !t.starts_with('#'));
+    let delimiter = [b',', b';', b'\t']
+        .into_iter()
+        .find(|&d| first_text.is_some_and(|f| f.as_bytes().contains(&d)))
+        .unwrap_or(b',');
+    let mut reader = csv::ReaderBuilder::new()
+        .delimiter(delimiter)
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let mut rows = reader.records().filter_map(|r| match r {
+        Ok(record) => {
+            let line = record.position().map_or(0, |p| p.line() as usize);
+            let blank = record.iter().all(|f| clean(f).is_empty());
+            let comment = record.get(0).is_some_and(|f| f.starts_with('#'));
+            (!blank && !comment).then_some(Ok((line, record)))
+        }
+        Err(e) => Some(Err(format!("{name}: {e}"))),
     });
-    let Some((first_line, first)) = rows.next() else {
+    let Some((first_line, first)) = rows.next().transpose()? else {
         return Err(format!("{name}: no rows"));
     };
-    let delimiter = [',', ';', '\t']
-        .into_iter()
-        .find(|&d| first.contains(d))
-        .unwrap_or(',');
-    let header: Option<Vec<&str>> = {
-        let fields: Vec<&str> = first.split(delimiter).map(clean).collect();
-        fields
-            .iter()
-            .any(|f| f.parse::<f64>().is_err())
-            .then_some(fields)
-    };
+    let header: Option<Vec<String>> = first
+        .iter()
+        .any(|f| clean(f).parse::<f64>().is_err())
+        .then(|| first.iter().map(|f| clean(f).to_string()).collect());
     let find = |label: &str, c: &Column| -> Result<usize, String> {
         match c {
             Column::Index(i) => Ok(usize::try_from(*i).unwrap_or(1).saturating_sub(1)),
@@ -276,7 +290,7 @@ pub(super) fn read_csv(
                         "{name}: {label} '{n}' needs a header row, but row {first_line} is all numbers"
                     ));
                 };
-                h.iter().position(|f| *f == n.trim()).ok_or_else(|| {
+                h.iter().position(|f| f == n.trim()).ok_or_else(|| {
                     format!(
                         "{name}: row {first_line}: no column named '{n}' for {label} (the header has {})",
                         h.iter().map(|f| format!("'{}'", shown(f))).collect::<Vec<_>>().join(", ")
@@ -290,15 +304,14 @@ pub(super) fn read_csv(
         Time::Column(c) => Some(find("time_column", c)?),
         Time::Rate(_) => None,
     };
-    let number = |line: usize, fields: &[&str], c: usize| -> Result<f64, String> {
-        let Some(raw) = fields.get(c) else {
+    let number = |line: usize, fields: &csv::StringRecord, c: usize| -> Result<f64, String> {
+        let Some(f) = fields.get(c).map(clean) else {
             return Err(format!(
                 "{name}: row {line}, column {}: missing (the row has {} columns)",
                 c + 1,
                 fields.len()
             ));
         };
-        let f = clean(raw);
         match f.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
             Ok(_) => Err(format!(
@@ -315,14 +328,14 @@ pub(super) fn read_csv(
     };
     let data = header
         .is_none()
-        .then_some((first_line, first))
+        .then_some(Ok((first_line, first)))
         .into_iter()
         .chain(rows);
     let mut samples: Vec<(f64, f64)> = Vec::new();
     let mut start = 0.0;
     let mut previous = (0usize, 0.0f64);
-    for (line, row) in data {
-        let fields: Vec<&str> = row.split(delimiter).collect();
+    for row in data {
+        let (line, fields) = row?;
         let x = number(line, &fields, x_col)?;
         let t = match (t_col, time) {
             (Some(c), _) => {
