@@ -8,23 +8,18 @@
 //! - An accepted step gives a finite force, tangent and dissipated energy,
 //!   the force and tangent within [`Real::GUARD`] in magnitude, and so
 //!   does each effect's own report.
+//!
+//! [`ParamError`]: bushing::ParamError
 
 use arbitrary::{Result, Unstructured};
-use bushing::{Backbone, Bushing, BushingState, Effect, EffectOutput, Output, ParamError, Real};
+use bushing::{Backbone, Bushing, BushingState, Effect, EffectOutput, Output, Real};
 
 use crate::draw::Path;
 use crate::num::Num;
 
-/// The model, or `None` after forming the error's text.
-pub fn built<M>(r: core::result::Result<M, ParamError>) -> Option<M> {
-    match r {
-        Ok(m) => Some(m),
-        Err(e) => {
-            let _ = e.to_string();
-            None
-        }
-    }
-}
+// Drawing parameters builds backbones with `built`, so it lives in `draw`;
+// it is the construction half of this contract.
+pub use crate::draw::built;
 
 /// Finite and within [`Real::GUARD`] in magnitude (a NaN fails).
 pub fn guarded<T: Real>(v: T) -> bool {

@@ -1,10 +1,21 @@
 //! Parameters, inputs and backbones drawn from the fuzzer's bytes.
 
 use arbitrary::{Result, Unstructured};
-use bushing::{Backbone, MonotoneSpline, Polynomial};
+use bushing::{Backbone, MonotoneSpline, ParamError, Polynomial};
 
-use crate::contract::built;
 use crate::num::Num;
+
+/// The model, or `None` after forming the error's text (the construction
+/// half of the contract of [`crate::contract`]).
+pub fn built<M>(r: core::result::Result<M, ParamError>) -> Option<M> {
+    match r {
+        Ok(m) => Some(m),
+        Err(e) => {
+            let _ = e.to_string();
+            None
+        }
+    }
+}
 
 /// A parameter: mostly in `[lo, hi]`, sometimes a special value or any
 /// bit pattern.

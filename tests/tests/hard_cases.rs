@@ -121,7 +121,8 @@ The measured column is the host run that wrote this file.
 
 #[cfg(not(target_os = "none"))]
 const FOOTER: &str = "
-Source: `tests/src/hard.rs` (one function per case, its set-up in its comment).
+Source: `tests/src/hard.rs` (the table) and `tests/src/hard/` (one module per model family,
+one function per case, its set-up in its comment).
 
 Beside the named cases:
 

@@ -12,6 +12,9 @@
 //!   the error each time: within 2.4e-7 (`f32`) and 4.5e-16 (`f64`) of the
 //!   exact value (tested). About 15 guest instructions on a Cortex-M4F; libm's
 //!   `sqrtf` alone is about 77, and a division more.
+//! - `clamp` (within the crate): `v.max(lo).min(hi)` by comparisons, for the
+//!   phase argument of the sin/cos polynomials and the tracker's bands
+//!   (`f32::max` is a libm call on a Cortex-M4F).
 //!
 //! The `f32` and `f64` paths are chosen by the size and the epsilon of the
 //! type, known at compile time; another [`Real`] type (fixed point) takes its
@@ -82,6 +85,17 @@ pub fn rsqrt<T: Real>(x: T) -> T {
         }
     } else {
         T::ONE / x.sqrt()
+    }
+}
+
+/// `v.max(lo).min(hi)` for `lo <= hi` (NaN gives `lo`) by comparisons:
+/// `f32::max` is a libm call on a Cortex-M4F.
+#[inline(always)]
+pub(crate) fn clamp<T: Real>(v: T, lo: T, hi: T) -> T {
+    if v >= lo {
+        if v > hi { hi } else { v }
+    } else {
+        lo
     }
 }
 

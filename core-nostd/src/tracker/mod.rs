@@ -12,7 +12,7 @@
 //!   sine test (seed 000 eqs 1.1-1.3, Fig 1.24).
 //! - [`trig`]: sin and cos of the phase step without libm trig.
 //! - [`fast`]: `e^x` of a small log-decay and `1/√x` without libm calls or
-//!   a division, for the per-sample path.
+//!   a division, and a clamp by comparisons, for the per-sample path.
 //! - [`relevance`]: the Iwan relevance check (eqs 7.17-7.18): damping
 //!   predicted from the frequency drop of a tracked curve, and the inverse.
 //! - [`unscented`]: scalar unscented transform and linearisation (eqs

@@ -8,13 +8,14 @@
 //! Cost: 12 multiply-adds and one comparison (two more to clamp the
 //! argument, which [`sin_cos_in_range`] leaves to its caller).
 
+use super::fast::clamp;
 use crate::real::Real;
 
 /// `(sin θ, cos θ)` for θ in [0, π]; arguments outside are clamped to it.
 #[inline]
 pub fn sin_cos<T: Real>(theta: T) -> (T, T) {
     let pi = T::from_f64(core::f64::consts::PI);
-    sin_cos_in_range(super::modal::clamp(theta, T::ZERO, pi))
+    sin_cos_in_range(clamp(theta, T::ZERO, pi))
 }
 
 /// `(sin θ, cos θ)` for θ already in [0, π] (unspecified outside).

@@ -4,9 +4,17 @@
 //! tangent after a refused pose.
 
 use bushing::six_dof::{Connectivity, Pose, Quat, SixDof};
-use bushing::{Dashpot, FirstLoading, KfTable, Real, TurningPoints};
+use bushing::{
+    Bushing, Dashpot, Effect, EffectOutput, Faults, FirstLoading, IwanBank, IwanCellSpec, KfTable,
+    MaxwellBank, MaxwellForm, Param, ParamError, Polynomial, Real, TurningPoints, XfBank, XfForm,
+    XfSpec,
+};
 
-use super::*;
+use super::maxwell::four_cells;
+use super::{Measure, miss, refused_as, worst};
+use crate::check::param;
+use crate::noise::Noise;
+use crate::stack::sts_bushing;
 
 /// A K_f table in f32 whose values, force gained, slope or dissipated work
 /// leave the working type is refused, naming the point; one that fits is

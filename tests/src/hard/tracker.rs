@@ -1,7 +1,13 @@
 //! Hard cases of the modal tracker: zero amplitude, frequency jumps, close
 //! modes, outliers, signal loss and a mode that sinks into the noise.
 
-use super::*;
+use core::f64::consts::TAU;
+
+use bushing::tracker::{Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning};
+
+use super::{Measure, miss, worst};
+use crate::check::{Failure, param};
+use crate::noise::Noise;
 
 /// An EKF on one sensor of `measured` at `dt`, started at `f0` Hz and
 /// damping `zeta` with `amplitude`.

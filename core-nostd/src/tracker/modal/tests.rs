@@ -1,4 +1,6 @@
+use super::rotation::{anchor_at, rotation, rotation_near, rotation_pair};
 use super::*;
+use crate::error::{Param, ParamError};
 
 fn sensor() -> [SensorSpec; 1] {
     [SensorSpec {

@@ -1,0 +1,373 @@
+//! The unscented Kalman filter: the factorisation with θ and λ first, the
+//! prediction and the innovation of one sensor, the amplitude columns in
+//! closed form (see the module docs of `modal`).
+
+use super::matrix::{entry, get, put, row, set, set_row, sym_row};
+use super::rotation::{rotation_cached, rotation_pair};
+use super::{Core, ModalTracker};
+use crate::real::Real;
+use crate::tracker::fast::{min_positive, rsqrt};
+
+impl<T: Real, const N: usize> ModalTracker<T, N> {
+    /// Factorisation for the sigma points, in the order θ, λ of every mode,
+    /// then the amplitudes: `cols[t]` gets column t of the lower Cholesky
+    /// factor for the 2 modes θ and λ pivots (zero on the states eliminated
+    /// before), `schur` the covariance of the amplitudes given θ and λ,
+    /// `P - Σ_t cols[t] cols[t]ᵀ` (its amplitude block; the rest is
+    /// meaningless), which is all the amplitude columns contribute (see
+    /// `predict_ukf`). The amplitude pivots are still eliminated to check
+    /// that P is positive definite; false if not. `1/√d` per pivot by
+    /// Newton's method, no division.
+    #[inline(always)]
+    pub(super) fn factor(
+        &self,
+        p: &[[T; N]; N],
+        cols: &mut [[T; N]; N],
+        schur: &mut [[T; N]; N],
+    ) -> bool {
+        if N < 8 {
+            return factor_natural(p, cols, schur);
+        }
+        // Permuted to the pivot order and factored right-looking: after
+        // pivot t the rows below hold the Schur complement on and below the
+        // diagonal (what lies elsewhere is never read). Whole-row updates
+        // (the column's zeros leave the eliminated part alone) unroll and
+        // need no bounds per entry.
+        let k_n = 2 * self.m_n();
+        let mut w = [[T::ZERO; N]; N];
+        for (i, row) in w.iter_mut().enumerate() {
+            let pi = self.pivot(i);
+            for (j, v) in row.iter_mut().enumerate().take(i + 1) {
+                *v = entry(p, pi, self.pivot(j));
+            }
+        }
+        for t in 0..N {
+            let d = entry(&w, t, t);
+            if !pivot_ok(d) {
+                return false;
+            }
+            if t + 1 == N {
+                break;
+            }
+            let r = rsqrt(d);
+            let mut l = [T::ZERO; N];
+            for (li, row) in l.iter_mut().zip(&w).skip(t + 1) {
+                *li = get(row, t) * r;
+            }
+            for (row, &li) in w.iter_mut().zip(&l).skip(t + 1) {
+                for (v, &lj) in row.iter_mut().zip(&l) {
+                    *v -= li * lj;
+                }
+            }
+            if t < k_n {
+                if let Some(col) = cols.get_mut(t) {
+                    *col = [T::ZERO; N];
+                    put(col, self.pivot(t), d * r);
+                    for (i, &li) in l.iter().enumerate().skip(t + 1) {
+                        put(col, self.pivot(i), li);
+                    }
+                }
+                if t + 1 == k_n {
+                    for (i, row) in w.iter().enumerate().skip(k_n) {
+                        let pi = self.pivot(i);
+                        for (j, &v) in row.iter().enumerate().take(i + 1).skip(k_n) {
+                            let pj = self.pivot(j);
+                            set(schur, pi, pj, v);
+                            set(schur, pj, pi, v);
+                        }
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// UKF prediction. With θ and λ factored first, the sigma points of the
+    /// amplitude columns `x ± γ l_t` share the centre's θ and λ, so the
+    /// process moves them linearly: `f(x) ± γ R l_t`, R the centre's
+    /// rotations. Their 2(n - 2 modes) points then add `2 W_i` times the
+    /// centre's deviation each (folded into the centre weights) and, as
+    /// `2 W_i γ² = 1`, exactly `R S Rᵀ` to the covariance, S the amplitude
+    /// covariance given θ and λ. Only the 4 modes points of the θ and λ
+    /// columns go through the rotation polynomials. The result is the scaled
+    /// unscented transform with this square root of P, not an approximation.
+    #[inline(always)]
+    pub(super) fn predict_ukf(&self, state: &mut Core<T, N>, anchor: &mut [[T; 4]; N]) -> bool {
+        let mut cols = [[T::ZERO; N]; N];
+        let mut schur = [[T::ZERO; N]; N];
+        if !self.factor(&state.p, &mut cols, &mut schur) {
+            return false;
+        }
+        let (m_n, k_n) = (self.m_n(), 2 * self.m_n());
+        let w = self.ut;
+        let x = state.x;
+        let mut rot = [(T::ZERO, T::ZERO); N];
+        let mut f0 = x;
+        for (m, (r, a)) in rot.iter_mut().zip(anchor.iter_mut()).enumerate().take(m_n) {
+            let (ti, li) = self.theta_lambda(m);
+            *r = rotation_cached(a, get(&x, ti), get(&x, li));
+            self.rotate_mode(&mut f0, m, *r);
+        }
+        // The θ and λ columns: column t is zero on the θ and λ of the
+        // modes before mode t/2, whose rotation is then the centre's.
+        let mut plus = [[T::ZERO; N]; N];
+        let mut minus = [[T::ZERO; N]; N];
+        for (t, ((l, xp), xm)) in cols
+            .iter()
+            .zip(plus.iter_mut())
+            .zip(minus.iter_mut())
+            .take(k_n)
+            .enumerate()
+        {
+            for (((p, n), &xi), &li) in xp.iter_mut().zip(xm.iter_mut()).zip(&x).zip(l) {
+                let d = w.spread * li;
+                *p = xi + d;
+                *n = xi - d;
+            }
+            for (m, &r) in rot.iter().enumerate().take(m_n) {
+                let (rp, rn) = if 2 * m + 1 >= t {
+                    let (ti, li) = self.theta_lambda(m);
+                    let g = w.spread;
+                    let [rp, rn] =
+                        rotation_pair(get(&x, ti), get(&x, li), g * get(l, ti), g * get(l, li), r);
+                    (rp, rn)
+                } else {
+                    (r, r)
+                };
+                self.rotate_mode(xp, m, rp);
+                self.rotate_mode(xm, m, rn);
+            }
+        }
+        let mut mean = [T::ZERO; N];
+        for (i, m) in mean.iter_mut().enumerate() {
+            let mut acc = T::ZERO;
+            for (xp, xm) in plus.iter().zip(&minus).take(k_n) {
+                acc += get(xp, i) + get(xm, i);
+            }
+            *m = w.centre_mean * get(&f0, i) + w.wi * acc;
+        }
+        let mut d0 = f0;
+        for (d, m) in d0.iter_mut().zip(&mean) {
+            *d -= *m;
+        }
+        for (xp, xm) in plus.iter_mut().zip(minus.iter_mut()).take(k_n) {
+            for ((p, n), m) in xp.iter_mut().zip(xm.iter_mut()).zip(&mean) {
+                *p -= *m;
+                *n -= *m;
+            }
+        }
+        let p = &mut state.p;
+        for i in 0..N {
+            let di = get(&d0, i);
+            for j in 0..N {
+                if j < i {
+                    continue;
+                }
+                let mut acc = T::ZERO;
+                for (xp, xm) in plus.iter().zip(&minus).take(k_n) {
+                    acc += get(xp, i) * get(xp, j) + get(xm, i) * get(xm, j);
+                }
+                let v = w.centre_cov * di * get(&d0, j) + w.wi * acc;
+                set(p, i, j, v);
+                set(p, j, i, v);
+            }
+        }
+        self.add_rotated(p, &schur, &rot);
+        state.x = mean;
+        self.add_process_noise(state);
+        true
+    }
+
+    /// `p += R S Rᵀ` on the amplitude block, R the rotation of each mode's
+    /// pairs: first the rows, then the columns on and above the diagonal,
+    /// mirrored.
+    #[inline(always)]
+    fn add_rotated(&self, p: &mut [[T; N]; N], s: &[[T; N]; N], rot: &[(T, T); N]) {
+        let (m_n, c_n) = (self.m_n(), self.c_n());
+        let mut rs = [[T::ZERO; N]; N];
+        for (m, &(ec, es)) in rot.iter().enumerate().take(m_n) {
+            for c in 0..c_n {
+                let (ai, bi) = self.pair(m, c);
+                let (sa, sb) = (sym_row(s, ai), sym_row(s, bi));
+                let (mut na, mut nb) = ([T::ZERO; N], [T::ZERO; N]);
+                for (j, (na, nb)) in na.iter_mut().zip(nb.iter_mut()).enumerate() {
+                    if self.is_amplitude(j) {
+                        let (va, vb) = (get(&sa, j), get(&sb, j));
+                        *na = ec * va - es * vb;
+                        *nb = es * va + ec * vb;
+                    }
+                }
+                set_row(&mut rs, ai, na);
+                set_row(&mut rs, bi, nb);
+            }
+        }
+        for m in 0..m_n {
+            for c in 0..c_n {
+                let (ai, bi) = self.pair(m, c);
+                for i in [ai, bi] {
+                    let r = row(&rs, i);
+                    for (m2, &(ec, es)) in rot.iter().enumerate().take(m_n) {
+                        for c2 in 0..c_n {
+                            let (aj, bj) = self.pair(m2, c2);
+                            if bj < i {
+                                continue;
+                            }
+                            let (va, vb) = (get(&r, aj), get(&r, bj));
+                            if aj >= i {
+                                let v = entry(p, i, aj) + (ec * va - es * vb);
+                                set(p, i, aj, v);
+                                set(p, aj, i, v);
+                            }
+                            let v = entry(p, i, bj) + (es * va + ec * vb);
+                            set(p, i, bj, v);
+                            set(p, bj, i, v);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// UKF innovation of sensor `c` with sigma points redrawn from the
+    /// current estimate: predicted sample, `v = Pxz`, `s = Pzz + r`. As in
+    /// the prediction, the amplitude columns see the sensor's linear
+    /// coefficients H at the centre (`z = H x` for fixed θ, λ) and add
+    /// exactly `H S Hᵀ` to Pzz and `S Hᵀ` to Pxz; only the θ and λ columns
+    /// are observed point by point.
+    #[inline(always)]
+    pub(super) fn innovation_ukf(
+        &self,
+        state: &Core<T, N>,
+        c: usize,
+        v: &mut [T; N],
+    ) -> Option<(T, T)> {
+        let mut cols = [[T::ZERO; N]; N];
+        let mut schur = [[T::ZERO; N]; N];
+        if !self.factor(&state.p, &mut cols, &mut schur) {
+            return None;
+        }
+        let (m_n, k_n) = (self.m_n(), 2 * self.m_n());
+        let w = self.ut;
+        let x = &state.x;
+        let mut h = [(T::ZERO, T::ZERO); N];
+        let mut z0 = T::ZERO;
+        for (m, hm) in h.iter_mut().enumerate().take(m_n) {
+            let (ti, li) = self.theta_lambda(m);
+            let (ai, bi) = self.pair(m, c);
+            *hm = self.coefficients(c, get(x, ti), get(x, li));
+            z0 += hm.0 * get(x, ai) + hm.1 * get(x, bi);
+        }
+        let mut zp = [T::ZERO; N];
+        let mut zm = [T::ZERO; N];
+        let mut sum = T::ZERO;
+        for ((l, zp), zm) in cols.iter().zip(zp.iter_mut()).zip(zm.iter_mut()).take(k_n) {
+            let (mut a, mut b) = (T::ZERO, T::ZERO);
+            for m in 0..m_n {
+                let (ti, li) = self.theta_lambda(m);
+                let (ai, bi) = self.pair(m, c);
+                let g = w.spread;
+                let (dt, dl) = (g * get(l, ti), g * get(l, li));
+                let (da, db) = (g * get(l, ai), g * get(l, bi));
+                let (t0, l0, a0, b0) = (get(x, ti), get(x, li), get(x, ai), get(x, bi));
+                let (hp, hq) = self.coefficients(c, t0 + dt, l0 + dl);
+                a += hp * (a0 + da) + hq * (b0 + db);
+                let (hp, hq) = self.coefficients(c, t0 - dt, l0 - dl);
+                b += hp * (a0 - da) + hq * (b0 - db);
+            }
+            *zp = a;
+            *zm = b;
+            sum += a + b;
+        }
+        let zhat = w.centre_mean * z0 + w.wi * sum;
+        // u = S Hᵀ (amplitude rows), then H S Hᵀ.
+        let mut u = [T::ZERO; N];
+        for (i, ui) in u.iter_mut().enumerate() {
+            if !self.is_amplitude(i) {
+                continue;
+            }
+            let r = sym_row(&schur, i);
+            let mut acc = T::ZERO;
+            for (m, &(hp, hq)) in h.iter().enumerate().take(m_n) {
+                let (ai, bi) = self.pair(m, c);
+                acc += hp * get(&r, ai) + hq * get(&r, bi);
+            }
+            *ui = acc;
+        }
+        let dz = z0 - zhat;
+        let mut s = w.centre_cov * dz * dz + get(&self.r, c);
+        for (m, &(hp, hq)) in h.iter().enumerate().take(m_n) {
+            let (ai, bi) = self.pair(m, c);
+            s += hp * get(&u, ai) + hq * get(&u, bi);
+        }
+        let mut spread = T::ZERO;
+        for (a, b) in zp.iter().zip(&zm).take(k_n) {
+            let (da, db) = (*a - zhat, *b - zhat);
+            spread += da * da + db * db;
+        }
+        s += w.wi * spread;
+        // Pxz = W_i γ Σ_t l_t (Z_t^+ - Z_t^-) over θ and λ columns, + S Hᵀ.
+        for (i, (vi, ui)) in v.iter_mut().zip(&u).enumerate() {
+            let mut acc = T::ZERO;
+            for ((l, a), b) in cols.iter().zip(&zp).zip(&zm).take(k_n) {
+                acc += get(l, i) * (*a - *b);
+            }
+            *vi = w.wi_spread * acc + *ui;
+        }
+        Some((zhat, s))
+    }
+}
+
+/// [`ModalTracker::factor`] for one mode, whose θ and λ come first: the
+/// plain right-looking Cholesky order, with loops the optimiser unrolls.
+#[inline(always)]
+fn factor_natural<T: Real, const N: usize>(
+    p: &[[T; N]; N],
+    cols: &mut [[T; N]; N],
+    schur: &mut [[T; N]; N],
+) -> bool {
+    let mut w = *p;
+    for t in 0..N {
+        let d = entry(&w, t, t);
+        if !pivot_ok(d) {
+            return false;
+        }
+        if t + 1 == N {
+            break;
+        }
+        let r = rsqrt(d);
+        // Constant trip counts and masks, so that the loops unroll.
+        let mut l = [T::ZERO; N];
+        for (i, li) in l.iter_mut().enumerate() {
+            if i > t {
+                *li = entry(&w, i, t) * r;
+            }
+        }
+        for i in 0..N {
+            let li = get(&l, i);
+            for j in 0..N {
+                if i > t && j >= i {
+                    let v = entry(&w, i, j) - li * get(&l, j);
+                    set(&mut w, i, j, v);
+                    set(&mut w, j, i, v);
+                }
+            }
+        }
+        if t < 2 {
+            put(&mut l, t, d * r);
+            if let Some(col) = cols.get_mut(t) {
+                *col = l;
+            }
+            if t == 1 {
+                *schur = w;
+            }
+        }
+    }
+    true
+}
+
+/// A usable pivot: positive (and normal, for [`rsqrt`]) and below GUARD
+/// (finite; a larger variance of these scaled states is a diverged filter).
+#[inline(always)]
+fn pivot_ok<T: Real>(d: T) -> bool {
+    d > min_positive::<T>() && d < T::GUARD
+}
