@@ -27,10 +27,10 @@ use std::time::{Duration, Instant};
 use bushing::Real;
 
 use crate::model::{self, StepRow};
+use crate::plot::{self, Plot, Series};
 use crate::probe::{self, ModulusPoint, ModulusProbe};
 use crate::profile;
 use crate::scene::{NumberType, Scene};
-use crate::svg::{self, Plot, Series};
 
 /// What a run measured.
 #[derive(Debug, Clone)]
@@ -278,6 +278,7 @@ fn run_typed<T: Real + 'static>(
             ),
             Series::line("long-term elastic branch g0 F_inf(x)", elastic_points),
         ],
+        ..Plot::default()
     };
     write(&mut files, "force-displacement.svg", loop_plot.render())?;
 
@@ -298,6 +299,7 @@ fn run_typed<T: Real + 'static>(
         y_label: "force F [N]".into(),
         x_log: false,
         series,
+        ..Plot::default()
     };
     write(&mut files, "force-time.svg", force_plot.render())?;
 
@@ -318,6 +320,7 @@ fn run_typed<T: Real + 'static>(
         y_label: "dissipated power P [mW = N·mm/s]".into(),
         x_log: false,
         series: per_effect(power_t.finish(), "total, energy of each step / dt"),
+        ..Plot::default()
     };
     let cumulative = Plot {
         title: title("Cumulative dissipated energy"),
@@ -325,11 +328,12 @@ fn run_typed<T: Real + 'static>(
         y_label: "dissipated energy E [mJ = N·mm]".into(),
         x_log: false,
         series: per_effect(energy_t.finish(), "total"),
+        ..Plot::default()
     };
     write(
         &mut files,
         "dissipated-power.svg",
-        svg::render_panels(&[power, cumulative]),
+        plot::render_panels(&[power, cumulative]),
     )?;
 
     let modulus = probe.finish();
@@ -338,7 +342,7 @@ fn run_typed<T: Real + 'static>(
         write(
             &mut files,
             "modulus-amplitude.svg",
-            svg::render_panels(&probe::modulus_plots(
+            plot::render_panels(&probe::modulus_plots(
                 &modulus,
                 &title("Instantaneous complex modulus"),
             )),
