@@ -136,6 +136,9 @@ pub struct RunArgs {
     /// Refuse a run whose output would be larger (e.g. 500MB, 4GiB).
     #[arg(long, default_value = "1GiB", value_name = "SIZE")]
     max_output: ByteSize,
+    /// Write each plot as a PNG too.
+    #[arg(long)]
+    png: bool,
     /// Print the summary as JSON.
     #[arg(long)]
     json: bool,
@@ -204,6 +207,7 @@ impl CliError {
         match self {
             Self::Scene(_) | Self::Usage(_) => 2,
             Self::Run(RunError::Build(_) | RunError::TooLarge { .. }) => 2,
+            Self::Run(RunError::Plot(_)) => 1,
             Self::Run(RunError::Output(e)) | Self::Output(e) => match e {
                 OutputError::Io { .. } => 1,
                 // A link, a file or a folder of other files as --out.
@@ -329,6 +333,7 @@ fn run_command(args: &RunArgs) -> Result<(), CliError> {
     let options = run::Options {
         progress: !args.json,
         max_output: args.max_output.as_u64(),
+        png: args.png,
     };
     let summary = run::run_with(&scene, &args.out, options)?;
     if args.json {

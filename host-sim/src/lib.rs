@@ -22,12 +22,12 @@ pub mod iwan_report;
 pub mod model;
 pub mod modulus;
 pub mod output;
+pub mod plot;
 pub mod powertrain;
 pub mod probe;
 pub mod profile;
 pub mod run;
 pub mod scene;
-pub mod svg;
 pub mod validate;
 pub mod xf_report;
 

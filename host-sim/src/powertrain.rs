@@ -538,7 +538,7 @@ impl Transient {
 pub fn report(dir: &std::path::Path) -> Result<String, String> {
     use std::fmt::Write as _;
 
-    use crate::svg::{Plot, Series, render_panels};
+    use crate::plot::{Plot, Series, render_panels};
 
     let s = Suspension::synthesised();
     let modes = s
@@ -602,6 +602,7 @@ pub fn report(dir: &std::path::Path) -> Result<String, String> {
                 })
             })
             .collect(),
+        ..Plot::default()
     };
     let so_far = Plot {
         title: "Stop/start: energy dissipated so far, per mount and in total".into(),
@@ -632,6 +633,7 @@ pub fn report(dir: &std::path::Path) -> Result<String, String> {
                 per_mount.chain(core::iter::once(total))
             })
             .collect(),
+        ..Plot::default()
     };
     write("powertrain-power.svg", &render_panels(&[power, so_far]))?;
     let modal: Vec<Plot> = runs
@@ -651,6 +653,7 @@ pub fn report(dir: &std::path::Path) -> Result<String, String> {
                     )
                 })
                 .collect(),
+            ..Plot::default()
         })
         .collect();
     write("powertrain-modal.svg", &render_panels(&modal))?;

@@ -5,7 +5,7 @@ use std::collections::VecDeque;
 
 use bushing::tracker::{Channel, ModulusSpec, ModulusState, ModulusTracker, SineSpec};
 
-use crate::svg::{Plot, Series};
+use crate::plot::{Marker, Plot, Series, Shape, palette};
 
 /// One point of the instantaneous-modulus plot: the tracked complex
 /// modulus at the end of one tracked period.
@@ -310,8 +310,7 @@ pub fn modulus_csv(points: &[ModulusPoint]) -> String {
 /// one series per frequency; one panel per preload when there are several
 /// (so that each legend stays short).
 pub fn modulus_plots(points: &[ModulusPoint], title: &str) -> Vec<Plot> {
-    // Means within 1 µm are one preload (+ 0.0 turns -0 into 0).
-    let mean = |p: &ModulusPoint| (p.mean_mm * 1e3).round() / 1e3 + 0.0;
+    let mean = preload_of;
     let mut preloads: Vec<f64> = points.iter().map(mean).collect();
     preloads.sort_by(f64::total_cmp);
     preloads.dedup();
@@ -345,6 +344,7 @@ pub fn modulus_plots(points: &[ModulusPoint], title: &str) -> Vec<Plot> {
             y_label: "modulus K', K'' [N/mm]".into(),
             x_log: hi > 3.0 * lo,
             series,
+            ..Plot::default()
         }
     };
     if points.is_empty() {
@@ -358,6 +358,142 @@ pub fn modulus_plots(points: &[ModulusPoint], title: &str) -> Vec<Plot> {
         .iter()
         .map(|&m| panel(format!("{title}, mean x {m} mm"), &move |p| mean(p) == m))
         .collect()
+}
+
+/// Means within 1 µm are one preload (+ 0.0 turns -0 into 0).
+fn preload_of(p: &ModulusPoint) -> f64 {
+    (p.mean_mm * 1e3).round() / 1e3 + 0.0
+}
+
+/// Amplitudes within 4 significant digits are one: the key and the value.
+fn amplitude_of(p: &ModulusPoint) -> (String, f64) {
+    let key = format!("{:.3e}", p.amplitude_mm);
+    let value = key.parse().unwrap_or(p.amplitude_mm);
+    (key, value)
+}
+
+/// The distinct amplitudes of `points`, in order of appearance.
+fn amplitudes<'a>(points: impl Iterator<Item = &'a ModulusPoint>) -> Vec<(String, f64)> {
+    let mut out: Vec<(String, f64)> = Vec::new();
+    for p in points {
+        let a = amplitude_of(p);
+        if !out.iter().any(|(k, _)| *k == a.0) {
+            out.push(a);
+        }
+    }
+    out
+}
+
+/// Whether `points` sweep the frequency: two distinct frequencies or more
+/// at one amplitude. Such a run reads against frequency
+/// ([`frequency_plots`]); one at a single frequency per amplitude, against
+/// amplitude ([`modulus_plots`]).
+pub fn sweeps_frequency(points: &[ModulusPoint]) -> bool {
+    amplitudes(points.iter()).iter().any(|(key, _)| {
+        let mut frequencies: Vec<f64> = Vec::new();
+        for p in points.iter().filter(|p| amplitude_of(p).0 == *key) {
+            if !frequencies
+                .iter()
+                .any(|f| (f - p.frequency_hz).abs() <= 1e-9 * f.abs())
+            {
+                frequencies.push(p.frequency_hz);
+            }
+        }
+        frequencies.len() >= 2
+    })
+}
+
+/// More amplitudes than this share one series (a run whose amplitude is
+/// measured rather than imposed).
+const MAX_AMPLITUDE_SERIES: usize = 10;
+
+/// The modulus against frequency on a logarithmic axis, for a sweep in
+/// frequency (a stepped sine): three panels, storage K′, loss K″ (N/mm)
+/// and loss factor K″/K′, one series per imposed amplitude: every point as
+/// a marker and a line through the last (settled) point at each
+/// frequency. With several preloads, three panels per preload.
+pub fn frequency_plots(points: &[ModulusPoint], title: &str) -> Vec<Plot> {
+    type Quantity = (&'static str, &'static str, fn(&ModulusPoint) -> f64);
+    const QUANTITIES: [Quantity; 3] = [
+        ("storage modulus", "storage modulus K' [N/mm]", |p| {
+            p.storage
+        }),
+        ("loss modulus", "loss modulus K'' [N/mm]", |p| p.loss),
+        (
+            "loss factor",
+            "loss factor K''/K' [-]",
+            ModulusPoint::loss_factor,
+        ),
+    ];
+    let mut preloads: Vec<f64> = points.iter().map(preload_of).collect();
+    preloads.sort_by(f64::total_cmp);
+    preloads.dedup();
+    let several = preloads.len() > 1;
+    if preloads.is_empty() {
+        preloads.push(0.0);
+    }
+    let mut plots = Vec::new();
+    for &preload in &preloads {
+        let here: Vec<&ModulusPoint> = points
+            .iter()
+            .filter(|p| !several || preload_of(p) == preload)
+            .collect();
+        let mut groups = amplitudes(here.iter().copied());
+        let merged = groups.len() > MAX_AMPLITUDE_SERIES;
+        if merged {
+            groups = vec![(String::new(), f64::NAN)];
+        }
+        for (what, y_label, value) in QUANTITIES {
+            let mut plot = Plot {
+                title: match (points.is_empty(), several) {
+                    (true, _) => {
+                        format!("{title}: {what} (no sine held at one frequency for 3 periods)")
+                    }
+                    (false, true) => format!("{title}, mean x {preload} mm: {what}"),
+                    (false, false) => format!("{title}: {what}"),
+                },
+                x_label: "frequency f [Hz]".into(),
+                y_label: y_label.into(),
+                x_log: true,
+                ..Plot::default()
+            };
+            for (i, (key, amplitude)) in groups.iter().enumerate() {
+                let of = || {
+                    here.iter()
+                        .copied()
+                        .filter(|p| merged || amplitude_of(p).0 == *key)
+                };
+                let name = if merged {
+                    format!("all {} amplitudes", here.len())
+                } else {
+                    format!("X = {amplitude} mm")
+                };
+                // The last point at each frequency, by frequency.
+                let mut settled: Vec<(f64, f64)> = Vec::new();
+                for p in of() {
+                    match settled.iter_mut().find(|s| s.0 == p.frequency_hz) {
+                        Some(s) => s.1 = value(p),
+                        None => settled.push((p.frequency_hz, value(p))),
+                    }
+                }
+                settled.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let color = palette(i);
+                plot.series
+                    .push(Series::line("", settled).with_color(color));
+                plot.series.push(
+                    Series::markers(name, of().map(|p| (p.frequency_hz, value(p))).collect())
+                        .with_color(color)
+                        .with_marker(Marker {
+                            shape: Shape::nth(i),
+                            radius: 4,
+                            filled: true,
+                        }),
+                );
+            }
+            plots.push(plot);
+        }
+    }
+    plots
 }
 
 #[cfg(test)]

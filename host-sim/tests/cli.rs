@@ -504,3 +504,39 @@ fn the_scripts_find_the_build_where_cargo_puts_it() {
         elsewhere.path()
     );
 }
+
+#[test]
+fn a_test_over_frequency_is_plotted_against_frequency_and_png_on_request() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    sim()
+        .args(["run", "scenes/profile-stepped-sine.toml", "--png", "--out"])
+        .arg(&out)
+        .current_dir(root())
+        .assert()
+        .code(0);
+    let svg = fs::read_to_string(out.join("modulus-frequency.svg")).unwrap();
+    assert!(svg.contains("[Hz]"), "a frequency axis");
+    for stem in ["force-displacement", "force-time", "modulus-frequency"] {
+        let png = fs::read(out.join(format!("{stem}.png"))).unwrap();
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{stem}.png is a PNG");
+    }
+    // One frequency: no frequency plot, and no PNG unless asked.
+    sim()
+        .args(["run", "scenes/quickstart.toml", "--out"])
+        .arg(&out)
+        .current_dir(root())
+        .assert()
+        .code(0);
+    assert_eq!(
+        visible(&out),
+        [
+            "dissipated-power.svg",
+            "force-displacement.svg",
+            "force-time.svg",
+            "modulus-amplitude.svg",
+            "modulus.csv",
+            "trace.csv"
+        ]
+    );
+}

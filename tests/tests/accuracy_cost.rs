@@ -6,7 +6,7 @@
 use std::sync::OnceLock;
 
 use bushing_sim::accuracy_cost::{self, CSV_COLUMNS, Inputs, Options, Report};
-use bushing_sim::svg;
+use bushing_sim::plot;
 
 /// A few lines as `kernel-cost` prints them (M4F and M3), one of a family
 /// the generator does not know, and a comment.
@@ -139,7 +139,7 @@ fn quick_report_has_every_part() {
     assert_eq!(joined[11], "32");
 
     // The plot.
-    svg::well_formed(&report.svg).expect("well-formed SVG");
+    plot::well_formed(&report.svg).expect("well-formed SVG");
     assert!(report.svg.contains("maxwell ("));
 
     // Markdown: targets, cheapest within 1 %, tables, other kernels, peers.

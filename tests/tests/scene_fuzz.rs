@@ -1014,10 +1014,10 @@ const REGRESSIONS: &[(&str, &str, Option<&str>)] = &[
     (
         // Found by the long run (seed 2000006). A sine of 5e-324 mm in f64
         // gives forces of a few 1e-322 N: the tick step of the force axis
-        // underflowed to 0 in `svg::ticks`, `(lo / step).ceil() as i64`
+        // underflowed to 0 in the former `svg::ticks`, `(lo / step).ceil() as i64`
         // saturated and collecting i64::MIN..=i64::MAX ticks panicked
         // ("capacity overflow").
-        "run::run, in svg::ticks (capacity overflow), subnormal sine",
+        "run::run, in the former svg::ticks (capacity overflow), subnormal sine",
         "[run]\nrate_hz = 1000\nnumber = \"f64\"\n[backbone]\ntype = \"polynomial\"\n\
          coefficients = [0.0, 100.0]\nrange = [-2.0, 2.0]\n[profile]\ntype = \"sine\"\n\
          amplitude = 5e-324\nfrequency_hz = 5.0\ncycles = 2\n",

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use bushing::{MaxwellBank, MaxwellSpec};
 use bushing_sim::scene::Effect;
 use bushing_sim::validate::{self, Outcome};
-use bushing_sim::{Scene, cost, run, svg};
+use bushing_sim::{Scene, cost, plot, run};
 
 fn out_dir(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("bushing-outputs-{name}-{}", std::process::id()))
@@ -34,7 +34,7 @@ fn texts(svg: &str) -> Vec<&str> {
 /// unit in brackets; `labels` are the expected ones (escaped as written).
 fn check_plot(path: &Path, labels: &[&str]) {
     let text = std::fs::read_to_string(path).unwrap();
-    svg::well_formed(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    plot::well_formed(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let all = texts(&text);
     for label in labels {
         assert!(

@@ -62,6 +62,9 @@ pub enum RunError {
     /// Writing the output failed.
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// A plot could not be drawn.
+    #[error("plot: {0}")]
+    Plot(#[from] crate::plot::PlotError),
 }
 
 /// What a run measured.
@@ -134,6 +137,8 @@ pub struct Options {
     /// Most bytes the run may write ([`estimate_output`] is checked
     /// against it before stepping).
     pub max_output: u64,
+    /// Write each figure as a PNG too.
+    pub png: bool,
 }
 
 /// The default output limit: 1 GiB.
@@ -144,6 +149,7 @@ impl Default for Options {
         Self {
             progress: false,
             max_output: MAX_OUTPUT,
+            png: false,
         }
     }
 }
@@ -217,7 +223,7 @@ fn run_typed<T: Real + 'static>(
     progress.finish();
     trace.finish()?;
     let (energy, peak) = (plots.energy(), plots.peak());
-    let (written, modulus, modulus_capped) = plots.write(&mut staged)?;
+    let (written, modulus, modulus_capped) = plots.write(&mut staged, options.png)?;
     let mut files = vec![trace_path];
     files.extend(written);
     staged.commit()?;

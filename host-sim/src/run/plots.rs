@@ -12,10 +12,10 @@ use bushing::Real;
 use super::RunError;
 use super::pipeline::{Sink, Step};
 use crate::output::Staged;
+use crate::plot::{self, Plot, Series};
 use crate::probe::{self, ModulusPoint, ModulusProbe};
 use crate::profile;
 use crate::scene::Scene;
-use crate::svg::{self, Plot, Series};
 
 /// Points kept for the force-displacement plot.
 pub const PLOT_POINTS: u64 = 20_000;
@@ -73,10 +73,12 @@ impl<'a> PlotSink<'a> {
     }
 
     /// Writes the plots and the modulus points into `out`, returning the
-    /// files written and the modulus points.
+    /// files written and the modulus points. With `png`, each figure is
+    /// also written as a PNG beside its SVG.
     pub fn write(
         self,
         out: &mut Staged,
+        png: bool,
     ) -> Result<(Vec<PathBuf>, Vec<ModulusPoint>, bool), RunError> {
         let Self {
             scene,
@@ -89,10 +91,10 @@ impl<'a> PlotSink<'a> {
             probe,
             ..
         } = self;
-        let mut files = Vec::new();
-        let mut write = |name: &str, text: String| -> Result<(), RunError> {
-            files.push(out.write(name, text.as_bytes())?);
-            Ok(())
+        let mut w = Figures {
+            out,
+            png,
+            files: Vec::new(),
         };
         let effects = if names.is_empty() {
             "backbone only".to_string()
@@ -115,7 +117,6 @@ impl<'a> PlotSink<'a> {
             },
             x_label: "displacement x [mm]".into(),
             y_label: "force F [N]".into(),
-            x_log: false,
             series: vec![
                 Series::line(
                     format!("total force, {effects}, {}", scene.number.name()),
@@ -123,8 +124,9 @@ impl<'a> PlotSink<'a> {
                 ),
                 Series::line("long-term elastic branch g0 F_inf(x)", elastic_points),
             ],
+            ..Plot::default()
         };
-        write("force-displacement.svg", loop_plot.render())?;
+        w.figure("force-displacement", &[loop_plot])?;
 
         let mut force_series = force_t.finish().into_iter();
         let mut series = vec![
@@ -141,10 +143,10 @@ impl<'a> PlotSink<'a> {
             title: title("Force against time"),
             x_label: "time t [s]".into(),
             y_label: "force F [N]".into(),
-            x_log: false,
             series,
+            ..Plot::default()
         };
-        write("force-time.svg", force_plot.render())?;
+        w.figure("force-time", &[force_plot])?;
 
         let per_effect = |all: Vec<Vec<(f64, f64)>>, total: &str| {
             let mut it = all.into_iter();
@@ -161,34 +163,55 @@ impl<'a> PlotSink<'a> {
             title: title("Dissipated power"),
             x_label: "time t [s]".into(),
             y_label: "dissipated power P [mW = N·mm/s]".into(),
-            x_log: false,
             series: per_effect(power_t.finish(), "total, energy of each step / dt"),
+            ..Plot::default()
         };
         let cumulative = Plot {
             title: title("Cumulative dissipated energy"),
             x_label: "time t [s]".into(),
             y_label: "dissipated energy E [mJ = N·mm]".into(),
-            x_log: false,
             series: per_effect(energy_t.finish(), "total"),
+            ..Plot::default()
         };
-        write(
-            "dissipated-power.svg",
-            svg::render_panels(&[power, cumulative]),
-        )?;
+        w.figure("dissipated-power", &[power, cumulative])?;
 
         let modulus = probe.finish();
         let capped = probe.capped();
         if probe.saw_sine {
-            write("modulus.csv", probe::modulus_csv(&modulus))?;
-            write(
-                "modulus-amplitude.svg",
-                svg::render_panels(&probe::modulus_plots(
-                    &modulus,
-                    &title("Instantaneous complex modulus"),
-                )),
-            )?;
+            let title = title("Instantaneous complex modulus");
+            let csv = probe::modulus_csv(&modulus);
+            w.files.push(w.out.write("modulus.csv", csv.as_bytes())?);
+            w.figure("modulus-amplitude", &probe::modulus_plots(&modulus, &title))?;
+            // A test over frequency reads against frequency.
+            if probe::sweeps_frequency(&modulus) {
+                w.figure(
+                    "modulus-frequency",
+                    &probe::frequency_plots(&modulus, &title),
+                )?;
+            }
         }
-        Ok((files, modulus, capped))
+        Ok((w.files, modulus, capped))
+    }
+}
+
+/// Writes figures, as SVG and on request as PNG too.
+struct Figures<'o> {
+    out: &'o mut Staged,
+    png: bool,
+    files: Vec<PathBuf>,
+}
+
+impl Figures<'_> {
+    fn figure(&mut self, stem: &str, panels: &[Plot]) -> Result<(), RunError> {
+        let svg = plot::render_panels(panels);
+        self.files
+            .push(self.out.write(&format!("{stem}.svg"), svg.as_bytes())?);
+        if self.png {
+            let png = plot::png_panels(panels)?;
+            self.files
+                .push(self.out.write(&format!("{stem}.png"), &png)?);
+        }
+        Ok(())
     }
 }
 
