@@ -185,34 +185,45 @@ pub struct TraceRow {
     pub force_n: f64,
 }
 
-/// Reads the `time_s`, `x_mm` and `force_N` columns of a `trace.csv`;
-/// `name` names it in errors.
+/// Reads the `time_s`, `x_mm` and `force_N` columns of a `trace.csv`
+/// with the `csv` crate; `name` names it in errors (with the file's line).
 pub fn parse_trace(name: &str, text: &str) -> Result<Vec<TraceRow>, String> {
-    let mut lines = text.lines().enumerate();
-    let header = lines
-        .next()
-        .ok_or_else(|| format!("{name}: empty file (no header row)"))?
-        .1;
-    let columns: Vec<&str> = header.split(',').map(str::trim).collect();
+    let mut reader = csv::ReaderBuilder::new()
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let header = reader
+        .headers()
+        .map_err(|e| format!("{name}: {e}"))?
+        .clone();
+    if header.is_empty() {
+        return Err(format!("{name}: empty file (no header row)"));
+    }
     let find = |c: &str| {
-        columns.iter().position(|h| *h == c).ok_or_else(|| {
-            format!("{name}:1: no column '{c}' (the header has {header}): not a bushing-sim trace")
+        header.iter().position(|h| h == c).ok_or_else(|| {
+            let shown: Vec<&str> = header.iter().collect();
+            format!(
+                "{name}:1: no column '{c}' (the header has {}): not a bushing-sim trace",
+                shown.join(",")
+            )
         })
     };
     let (t, x, f) = (find("time_s")?, find("x_mm")?, find("force_N")?);
     let mut rows = Vec::new();
-    for (k, raw) in lines {
-        let line = k + 1;
-        if raw.trim().is_empty() {
+    for record in reader.records() {
+        let record = record.map_err(|e| format!("{name}: {e}"))?;
+        let line = record.position().map_or(0, |p| p.line() as usize);
+        if record.iter().all(str::is_empty) {
             continue;
         }
-        let cells: Vec<&str> = raw.split(',').map(str::trim).collect();
         let cell = |i: usize, c: &str| {
-            let v = cells.get(i).ok_or_else(|| {
-                format!("{name}:{line}: no {c} (the row has {} cells)", cells.len())
+            let v = record.get(i).ok_or_else(|| {
+                format!("{name}:{line}: no {c} (the row has {} cells)", record.len())
             })?;
-            v.parse::<f64>()
-                .map_err(|_| format!("{name}:{line}: {c}: expected a number, got '{v}'"))
+            v.parse::<f64>().map_err(|_| {
+                let v: String = v.chars().take(40).flat_map(char::escape_debug).collect();
+                format!("{name}:{line}: {c}: expected a number, got '{v}'")
+            })
         };
         rows.push(TraceRow {
             line,
