@@ -77,19 +77,20 @@ fn dispatch(args: &[String]) -> Result<(), String> {
         }
         ["cost", scene] => {
             let scene = load(scene)?;
-            print!("{}", cost::cost(&scene)?);
+            print!("{}", cost::cost(&scene).map_err(|e| e.to_string())?);
             Ok(())
         }
         ["cost", "--instructions", file] | ["cost", file, "--instructions"] => {
             let scene = load(file)?;
-            let report = cost::cost_instructions(&PathBuf::from(file), &scene, INSTRUCTION_STEPS)?;
+            let report = cost::cost_instructions(&PathBuf::from(file), &scene, INSTRUCTION_STEPS)
+                .map_err(|e| e.to_string())?;
             print!("{report}");
             Ok(())
         }
         ["cost-part", file, part, steps] => {
             let scene = load(file)?;
             let number = |s: &str| s.parse::<usize>().map_err(|e| format!("{s}: {e}"));
-            cost::run_part(&scene, number(part)?, number(steps)?)
+            cost::run_part(&scene, number(part)?, number(steps)?).map_err(|e| e.to_string())
         }
         [name] | [name, "--out", _] if report(name).is_some() => {
             let text = report(name).map(|f| f()).unwrap_or_default();
@@ -115,14 +116,14 @@ fn dispatch(args: &[String]) -> Result<(), String> {
             }
         }
         ["accuracy-cost", rest @ ..] => {
-            print!("{}", accuracy_cost::cli(rest)?);
+            print!("{}", accuracy_cost::cli(rest).map_err(|e| e.to_string())?);
             Ok(())
         }
         ["accuracy-cost-part", calls] => {
             let calls = calls
                 .parse::<usize>()
                 .map_err(|e| format!("{calls}: {e}"))?;
-            accuracy_cost::host::run_part(calls)
+            accuracy_cost::host::run_part(calls).map_err(|e| e.to_string())
         }
         ["help"] | ["--help"] | ["-h"] => {
             println!("{USAGE}");
