@@ -13,7 +13,7 @@ use bushing::{
     Accumulator, Backbone, Bushing, Compensated, Effect, MaxwellBank, MaxwellForm, Multiplied,
     Plain, Real, XfBank, XfForm, XfSpec,
 };
-use bushing_boards::DT;
+use bushing_kernels::DT;
 use bushing_sim::accuracy_cost::families::{XF_CELL, maxwell_specs};
 use bushing_sim::accuracy_cost::host::{CALLS, drives};
 use divan::counter::ItemsCount;
@@ -50,7 +50,7 @@ fn bushing_pass<B: Backbone<f32>, E: Effect<f32>>(
     b: &Bushing<f32, B, E>,
 ) {
     let (amplitude, period) = bushing_sim::accuracy_cost::families::SINE;
-    let xs = bushing_boards::sine::<f32, CALLS>(amplitude, period);
+    let xs = bushing_kernels::sine::<f32, CALLS>(amplitude, period);
     bencher.counter(ItemsCount::new(xs.len())).bench_local(|| {
         let mut state = b.state_at(0.0);
         for &x in &xs {
@@ -100,7 +100,7 @@ fn maxwell8_compensated(bencher: Bencher<'_, '_>) {
 /// The firmware's clamp Iwan banks.
 #[divan::bench(consts = [1, 2, 4, 8, 16, 32, 64])]
 fn iwan<const N: usize>(bencher: Bencher<'_, '_>) {
-    let bank = bushing_boards::iwan_bank::<f32, N>().expect("the firmware's bank");
+    let bank = bushing_kernels::iwan_bank::<f32, N>().expect("the firmware's bank");
     effect_pass::<f32, _>(bencher, &bank);
 }
 
@@ -120,14 +120,14 @@ fn xf<T: Real>(bencher: Bencher<'_, '_>, name: &str) {
 /// The firmware's Grünwald cell (whole bushing step).
 #[divan::bench(consts = [16, 64, 256, 1024])]
 fn grunwald<const N: usize>(bencher: Bencher<'_, '_>) {
-    let b = bushing_boards::grunwald::<N>().expect("the firmware's cell");
+    let b = bushing_kernels::grunwald::<N>().expect("the firmware's cell");
     bushing_pass(bencher, &b);
 }
 
 /// Spline backbone + 4 Maxwell + 3 Jenkins.
 #[divan::bench]
 fn default_bushing(bencher: Bencher<'_, '_>) {
-    let b = bushing_boards::default_bushing::<f32>().expect("the default bushing");
+    let b = bushing_kernels::default_bushing::<f32>().expect("the default bushing");
     bushing_pass(bencher, &b);
 }
 
@@ -139,7 +139,7 @@ fn tracker<T: Real>(bencher: Bencher<'_, '_>, filter: &str) {
     } else {
         Filter::Ukf(UtParams::default())
     };
-    let tracker = bushing_boards::modal_tracker::<T>(filter).expect("a tracker");
+    let tracker = bushing_kernels::modal_tracker::<T>(filter).expect("a tracker");
     let samples: Vec<T> = (0..CALLS)
         .map(|k| T::from_f64((std::f64::consts::TAU * 0.02 * k as f64).cos()))
         .collect();

@@ -19,6 +19,9 @@
 //! Rows are joined to the firmware by `family`, `name`, `n` and `type`;
 //! firmware lines no row asks for go to an "other kernels" table, so a new
 //! family printed by the firmware shows up without a change here.
+//!
+//! The command's entry point is [`run`] with a [`Command`]; [`generate`]
+//! computes the report from inputs already in memory.
 
 pub mod families;
 pub mod firmware;
@@ -29,7 +32,92 @@ mod report;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
+use bushing::ParamError;
 use firmware::{Elf, KernelLine, PeerLine};
+
+use crate::cost::callgrind;
+use crate::fit::FitError;
+
+/// Why the report could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// An input file could not be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// An output could not be written.
+    #[error("{}: {source}", path.display())]
+    Write {
+        /// The file or directory.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A firmware output or ELF file that cannot be read.
+    #[error(transparent)]
+    Firmware(#[from] firmware::Error),
+    /// Two firmware lines for the same kernel.
+    #[error("{origin}: the same kernel as {previous} (target, family, name, n and type)")]
+    Duplicate {
+        /// `file:line` of the second line.
+        origin: String,
+        /// `file:line` of the first.
+        previous: String,
+    },
+    /// A kernel or reference refused its parameters.
+    #[error("{what}: {source}")]
+    Param {
+        /// Which kernel or reference.
+        what: String,
+        /// What it refused.
+        source: ParamError,
+    },
+    /// A Maxwell fit failed.
+    #[error("{what}: {source}")]
+    Fit {
+        /// Which fit.
+        what: String,
+        /// Why.
+        source: FitError,
+    },
+    /// A fit returned another number of cells than asked.
+    #[error("the fit returned {got} cells, not {asked}")]
+    FitCells {
+        /// Cells asked for.
+        asked: usize,
+        /// Cells returned.
+        got: usize,
+    },
+    /// A fitted bank of an order the report does not build.
+    #[error("no fitted bank of {0} cells")]
+    FitOrder(usize),
+    /// Counting host instructions failed.
+    #[error(transparent)]
+    Callgrind(#[from] callgrind::Error),
+    /// Callgrind wrote fewer dumps than the kernels it was given.
+    #[error("callgrind wrote {dumps} dumps for {kernels} kernels")]
+    MissingDumps {
+        /// Kernels printed by the part command.
+        kernels: usize,
+        /// Dumps written.
+        dumps: usize,
+    },
+    /// An `--elf` value that is not `TRIPLE=PATH`.
+    #[error("--elf takes TRIPLE=PATH, not {0}")]
+    ElfArgument(String),
+}
+
+/// An [`Error::Param`] naming `what`.
+pub(crate) fn refused(what: impl Into<String>) -> impl FnOnce(ParamError) -> Error {
+    move |source| Error::Param {
+        what: what.into(),
+        source,
+    }
+}
 
 /// What identifies a kernel: the firmware's `family`, `name`, `n` and
 /// `type`.
@@ -275,16 +363,16 @@ struct Lines {
 }
 
 impl Lines {
-    fn new(lines: Vec<KernelLine>) -> Result<Self, String> {
+    fn new(lines: Vec<KernelLine>) -> Result<Self, Error> {
         let mut by = BTreeMap::new();
         for l in lines {
             let key = Key::new(&l.family, &l.name, l.n, &l.number);
             let origin = l.origin.clone();
             if let Some(old) = by.insert((l.target.clone(), key), l) {
-                return Err(format!(
-                    "{origin}: the same kernel as {} (target, family, name, n and type)",
-                    old.origin
-                ));
+                return Err(Error::Duplicate {
+                    origin,
+                    previous: old.origin,
+                });
             }
         }
         Ok(Self {
@@ -332,7 +420,7 @@ fn join(
     let elf = elfs.get("m4f");
     row.code_bytes = sum_bytes(m4f.iter().map(|l| {
         let f = l.as_ref()?.function?;
-        elf?.function_size(f).map(u64::from)
+        elf?.function_size(f)
     }));
     let either = |i: usize| {
         m4f.get(i)
@@ -394,7 +482,7 @@ fn read_footprints(elfs: &BTreeMap<String, (String, Elf)>) -> Vec<Footprint> {
 }
 
 /// Computes the report from the firmware's outputs.
-pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, String> {
+pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
     let mut all = Vec::new();
     for (source, text) in &inputs.kernels {
         all.extend(firmware::parse_kernels(source, text)?);
@@ -415,8 +503,8 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, String> {
     let mut kernels = host::kernels()?;
     let ns = host::time_all(&mut kernels, options.timing);
     drop(kernels);
-    let instr = if options.callgrind && !options.quick && host::valgrind_available() {
-        host::instructions(host::CALLS, &std::env::temp_dir())?
+    let instr = if options.callgrind && !options.quick && callgrind::available() {
+        host::instructions(host::CALLS)?
     } else {
         BTreeMap::new()
     };
@@ -494,8 +582,11 @@ fn inputs_summary(inputs: &Inputs) -> Vec<String> {
 }
 
 /// Writes `accuracy-cost.{md,csv,svg}` into `dir`.
-pub fn write(report: &Report, dir: &Path) -> Result<Vec<PathBuf>, String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+pub fn write(report: &Report, dir: &Path) -> Result<Vec<PathBuf>, Error> {
+    std::fs::create_dir_all(dir).map_err(|source| Error::Write {
+        path: dir.to_path_buf(),
+        source,
+    })?;
     let mut out = Vec::new();
     for (name, text) in [
         ("accuracy-cost.md", &report.markdown),
@@ -503,70 +594,87 @@ pub fn write(report: &Report, dir: &Path) -> Result<Vec<PathBuf>, String> {
         ("accuracy-cost.svg", &report.svg),
     ] {
         let path = dir.join(name);
-        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+        std::fs::write(&path, text).map_err(|source| Error::Write {
+            path: path.clone(),
+            source,
+        })?;
         out.push(path);
     }
     Ok(out)
 }
 
-/// Usage of the command.
-pub const USAGE: &str = "bushing-sim accuracy-cost [--quick] [--no-callgrind] --kernels FILE... \
-     [--elf TRIPLE=PATH...] [--peers FILE...] --out DIR";
+/// What the `accuracy-cost` command is given.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Command {
+    /// `--quick`: [`Options::quick`] (fewer frequencies, steps, seeds and
+    /// repeats, no callgrind) instead of [`Options::full`].
+    pub quick: bool,
+    /// `--no-callgrind`: no host instruction counts in the full report.
+    pub no_callgrind: bool,
+    /// `--kernels FILE...`: outputs of the `kernel-cost` firmware.
+    pub kernels: Vec<PathBuf>,
+    /// `--elf TRIPLE=PATH...`: the firmware builds that printed them
+    /// ([`parse_elf_argument`] reads one).
+    pub elf: Vec<(String, PathBuf)>,
+    /// `--peers FILE...`: outputs of `kalman-peers`.
+    pub peers: Vec<PathBuf>,
+    /// `--out DIR`: where `accuracy-cost.{md,csv,svg}` go.
+    pub out: PathBuf,
+}
 
-/// The `accuracy-cost` command (its arguments after the command word):
-/// reads the inputs, generates, writes, and returns what it wrote.
-pub fn cli(args: &[&str]) -> Result<String, String> {
-    let mut options = Options::full();
-    let mut inputs = Inputs::default();
-    let mut out: Option<&str> = None;
-    let mut list: Option<&str> = None;
-    for &a in args {
-        match a {
-            "--quick" => {
-                options = Options {
-                    callgrind: false,
-                    ..Options::quick()
-                };
-                list = None;
-            }
-            "--no-callgrind" => {
-                options.callgrind = false;
-                list = None;
-            }
-            "--kernels" | "--elf" | "--peers" | "--out" => list = Some(a),
-            _ if a.starts_with("--") => {
-                return Err(format!("accuracy-cost: unknown option {a}\nusage: {USAGE}"));
-            }
-            value => match list {
-                Some("--kernels") | Some("--peers") => {
-                    let text =
-                        std::fs::read_to_string(value).map_err(|e| format!("{value}: {e}"))?;
-                    let entry = (value.to_string(), text);
-                    if list == Some("--kernels") {
-                        inputs.kernels.push(entry);
-                    } else {
-                        inputs.peers.push(entry);
-                    }
-                }
-                Some("--elf") => {
-                    let (triple, path) = value.split_once('=').ok_or_else(|| {
-                        format!("accuracy-cost: --elf takes TRIPLE=PATH, not {value}")
-                    })?;
-                    let bytes = std::fs::read(path).map_err(|e| format!("{path}: {e}"))?;
-                    inputs.elfs.push((triple.to_string(), bytes));
-                }
-                Some("--out") if out.is_none() => out = Some(value),
-                _ => {
-                    return Err(format!(
-                        "accuracy-cost: unexpected argument {value}\nusage: {USAGE}"
-                    ));
-                }
-            },
+impl Command {
+    /// The computation's [`Options`].
+    pub fn options(&self) -> Options {
+        let mut options = if self.quick {
+            Options::quick()
+        } else {
+            Options::full()
+        };
+        if self.no_callgrind {
+            options.callgrind = false;
         }
+        options
     }
-    let out = out.ok_or_else(|| format!("accuracy-cost: no --out DIR\nusage: {USAGE}"))?;
-    let report = generate(&inputs, &options)?;
-    let written = write(&report, Path::new(out))?;
+
+    /// Reads the files it names.
+    pub fn inputs(&self) -> Result<Inputs, Error> {
+        let text = |path: &PathBuf| {
+            std::fs::read_to_string(path)
+                .map(|text| (path.display().to_string(), text))
+                .map_err(|source| Error::Read {
+                    path: path.clone(),
+                    source,
+                })
+        };
+        let mut elfs = Vec::with_capacity(self.elf.len());
+        for (triple, path) in &self.elf {
+            let bytes = std::fs::read(path).map_err(|source| Error::Read {
+                path: path.clone(),
+                source,
+            })?;
+            elfs.push((triple.clone(), bytes));
+        }
+        Ok(Inputs {
+            kernels: self.kernels.iter().map(text).collect::<Result<_, _>>()?,
+            elfs,
+            peers: self.peers.iter().map(text).collect::<Result<_, _>>()?,
+        })
+    }
+}
+
+/// One `--elf` value, `TRIPLE=PATH`.
+pub fn parse_elf_argument(value: &str) -> Result<(String, PathBuf), Error> {
+    let (triple, path) = value
+        .split_once('=')
+        .ok_or_else(|| Error::ElfArgument(value.into()))?;
+    Ok((triple.to_string(), PathBuf::from(path)))
+}
+
+/// The `accuracy-cost` command: reads the inputs, generates, writes, and
+/// returns what it wrote and the verdict of each target.
+pub fn run(command: &Command) -> Result<String, Error> {
+    let report = generate(&command.inputs()?, &command.options())?;
+    let written = write(&report, &command.out)?;
     let mut msg = String::new();
     for p in written {
         msg.push_str(&format!("wrote {}\n", p.display()));

@@ -75,11 +75,7 @@ pub enum Command {
         within: Option<f64>,
     },
     /// Error against cost of every kernel (docs/accuracy-cost.md).
-    AccuracyCost {
-        /// `[--quick] --kernels FILE... --elf TRIPLE=PATH... [--peers FILE...] --out DIR`
-        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-        args: Vec<String>,
-    },
+    AccuracyCost(AccuracyCostArgs),
     /// One part of a scene stepped alone (for `cost --instructions`).
     #[command(hide = true)]
     CostPart {
@@ -165,6 +161,33 @@ pub struct CostArgs {
     /// Count host instructions with valgrind's callgrind instead of timing.
     #[arg(long)]
     instructions: bool,
+}
+
+/// `accuracy-cost`.
+#[derive(Debug, Args)]
+pub struct AccuracyCostArgs {
+    /// Fewer frequencies, steps, seeds and repeats, no callgrind (CI).
+    #[arg(long)]
+    quick: bool,
+    /// No host instruction counts in the full report.
+    #[arg(long)]
+    no_callgrind: bool,
+    /// Outputs of the `kernel-cost` firmware.
+    #[arg(long, num_args = 1.., required = true, value_name = "FILE")]
+    kernels: Vec<PathBuf>,
+    /// The firmware builds that printed them, as TRIPLE=PATH.
+    #[arg(long, num_args = 1.., value_name = "TRIPLE=PATH", value_parser = elf_argument)]
+    elf: Vec<(String, PathBuf)>,
+    /// Outputs of `kalman-peers`.
+    #[arg(long, num_args = 1.., value_name = "FILE")]
+    peers: Vec<PathBuf>,
+    /// Where accuracy-cost.{md,csv,svg} go.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+fn elf_argument(s: &str) -> Result<(String, PathBuf), String> {
+    accuracy_cost::parse_elf_argument(s).map_err(|e| e.to_string())
 }
 
 /// `maxwell-table` and the other reports.
@@ -276,10 +299,12 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
             let scene = args.scene.load()?;
             let text = if args.instructions {
                 cost::cost_instructions(&args.scene.scene, &scene, INSTRUCTION_STEPS)
-                    .map_err(CliError::Failed)?
+                    .map_err(|e| CliError::Failed(e.to_string()))?
                     .to_string()
             } else {
-                cost::cost(&scene).map_err(CliError::Failed)?.to_string()
+                cost::cost(&scene)
+                    .map_err(|e| CliError::Failed(e.to_string()))?
+                    .to_string()
             };
             print!("{text}");
             Ok(())
@@ -313,17 +338,24 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
                 Some(m) => Err(CliError::Check(format!("firmware and host differ at {m}"))),
             }
         }
-        Command::AccuracyCost { args } => {
-            let words: Vec<&str> = args.iter().map(String::as_str).collect();
-            print!("{}", accuracy_cost::cli(&words).map_err(CliError::Failed)?);
+        Command::AccuracyCost(a) => {
+            let command = accuracy_cost::Command {
+                quick: a.quick,
+                no_callgrind: a.no_callgrind,
+                kernels: a.kernels,
+                elf: a.elf,
+                peers: a.peers,
+                out: a.out,
+            };
+            let text = accuracy_cost::run(&command).map_err(|e| CliError::Failed(e.to_string()))?;
+            print!("{text}");
             Ok(())
         }
         Command::CostPart { scene, part, steps } => {
-            let scene = Scene::load(&scene)?;
-            cost::run_part(&scene, part, steps).map_err(CliError::Failed)
+            cost::run_part_of(&scene, part, steps).map_err(|e| CliError::Failed(e.to_string()))
         }
         Command::AccuracyCostPart { calls } => {
-            accuracy_cost::host::run_part(calls).map_err(CliError::Failed)
+            accuracy_cost::host::run_part(calls).map_err(|e| CliError::Failed(e.to_string()))
         }
     }
 }

@@ -26,20 +26,73 @@
 //! step. The run-time sized banks (`model::DynMaxwell`) loop over a slice
 //! of unknown length, which the compiler does not unroll; the const-size
 //! line shows what firmware pays for the same cells (about half).
+//!
+//! `cost --instructions` counts host instructions instead, with the
+//! [`callgrind`] harness that the accuracy-cost report uses too.
+
+pub mod callgrind;
 
 use std::fmt;
 use std::hint::black_box;
 use std::path::Path;
-use std::process::{Command, Stdio};
 use std::time::Duration;
 
 use bushing::{
     Accumulator, Backbone, Bushing, Compensated, Effect, MaxwellBank, MaxwellForm, MaxwellSpec,
-    Multiplied, Plain, Real,
+    Multiplied, ParamError, Plain, Real,
 };
 
 use crate::model::{self, AnyBackbone, SceneBushing, Shape};
-use crate::scene::{BackboneSpec, Effect as EffectDesc, NumberType, Scene, Storage};
+use crate::scene::{BackboneSpec, Effect as EffectDesc, NumberType, Scene, SceneError, Storage};
+
+/// Why a scene could not be costed.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The scene file could not be read.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// The scene, or one of the parts made from it, refused its
+    /// parameters.
+    #[error("{what}: {source}")]
+    Param {
+        /// Which model was being built.
+        what: String,
+        /// What it refused.
+        source: ParamError,
+    },
+    /// A part index past the scene's plan (the hidden `cost-part`
+    /// command).
+    #[error("no part {part} (the scene has {len})")]
+    NoPart {
+        /// The part asked for.
+        part: usize,
+        /// How many parts the plan has.
+        len: usize,
+    },
+    /// Counting under callgrind failed.
+    #[error(transparent)]
+    Callgrind(#[from] callgrind::Error),
+    /// Callgrind wrote no dump for a part.
+    #[error("part {part}: callgrind wrote no dump")]
+    NoDump {
+        /// The part.
+        part: usize,
+    },
+    /// Callgrind counted nothing in the stepping function.
+    #[error("part {part}: no instruction counted in {STEPPING}")]
+    NothingCounted {
+        /// The part.
+        part: usize,
+    },
+}
+
+/// An [`Error::Param`] naming `what`.
+fn refused(what: impl Into<String>) -> impl FnOnce(ParamError) -> Error {
+    move |source| Error::Param {
+        what: what.into(),
+        source,
+    }
+}
 
 /// How long to time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -159,80 +212,64 @@ impl fmt::Display for CostReport {
 }
 
 /// Times `scene` and its parts with the default [`CostOptions`].
-pub fn cost(scene: &Scene) -> Result<CostReport, String> {
+pub fn cost(scene: &Scene) -> Result<CostReport, Error> {
     cost_with(scene, CostOptions::default())
 }
 
 /// Times `scene` and its parts.
-pub fn cost_with(scene: &Scene, options: CostOptions) -> Result<CostReport, String> {
+pub fn cost_with(scene: &Scene, options: CostOptions) -> Result<CostReport, Error> {
     match scene.number {
         NumberType::F32 => cost_typed::<f32>(scene, options),
         NumberType::F64 => cost_typed::<f64>(scene, options),
     }
 }
 
+/// The hidden command that steps one part under callgrind:
+/// `PART_COMMAND SCENE.toml PART STEPS` ([`run_part_of`]).
+pub const PART_COMMAND: &str = "cost-part";
+
 /// Measures `scene` and its parts by host instructions: each part is
 /// stepped `steps` times in a child process (this program's hidden
-/// `cost-part` command, reading `scene_file`) under valgrind's callgrind,
+/// [`PART_COMMAND`], reading `scene_file`) under valgrind's callgrind,
 /// counting only the stepping function. Needs `valgrind` on the path.
 pub fn cost_instructions(
     scene_file: &Path,
     scene: &Scene,
     steps: usize,
-) -> Result<CostReport, String> {
-    let exe = std::env::current_exe().map_err(|e| format!("cannot find this program: {e}"))?;
-    let dir = std::env::temp_dir().join(format!("bushing-cost-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+) -> Result<CostReport, Error> {
     let plan = match scene.number {
         NumberType::F32 => plan::<f32>(scene)?.layout,
         NumberType::F64 => plan::<f64>(scene)?.layout,
     };
     let mut counts = Vec::with_capacity(plan.len);
     for part in 0..plan.len {
-        let out = dir.join(format!("part-{part}.out"));
-        let status = Command::new("valgrind")
-            .arg("--tool=callgrind")
-            .arg(format!("--callgrind-out-file={}", out.display()))
-            .arg(format!("--toggle-collect=*{STEPPING}*"))
-            .arg(&exe)
-            .args(["cost-part", &scene_file.display().to_string()])
-            .args([part.to_string(), steps.to_string()])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .status()
-            .map_err(|e| format!("cannot start valgrind (is it installed?): {e}"))?;
-        if !status.success() {
-            return Err(format!("valgrind on part {part} failed: {status}"));
-        }
-        let text = std::fs::read_to_string(&out).map_err(|e| format!("{}: {e}", out.display()))?;
-        let total = text
-            .lines()
-            .find_map(|l| {
-                l.strip_prefix("totals:")
-                    .or_else(|| l.strip_prefix("summary:"))
-            })
-            .and_then(|v| v.split_whitespace().next()?.parse::<u64>().ok())
-            .ok_or_else(|| format!("{}: no instruction total", out.display()))?;
+        let args = [
+            PART_COMMAND.into(),
+            scene_file.as_os_str().to_owned(),
+            part.to_string().into(),
+            steps.to_string().into(),
+        ];
+        let counted = callgrind::count(&args, STEPPING, None)?;
+        let total = *counted.totals.first().ok_or(Error::NoDump { part })?;
         if total == 0 {
-            return Err(format!("part {part}: no instruction counted in {STEPPING}"));
+            return Err(Error::NothingCounted { part });
         }
         counts.push(total as f64 / steps.max(1) as f64);
     }
-    std::fs::remove_dir_all(&dir).ok();
     Ok(plan.report(scene, Measure::Instructions, steps, 1, &counts))
 }
 
-/// The hidden `cost-part` command: steps part `part` of `scene`'s plan
-/// over `steps` steps of its profile (the child process of
+/// The hidden [`PART_COMMAND`]: steps part `part` of `scene`'s plan over
+/// `steps` steps of its profile (the child process of
 /// [`cost_instructions`]).
-pub fn run_part(scene: &Scene, part: usize, steps: usize) -> Result<(), String> {
-    fn go<T: Real + 'static>(scene: &Scene, part: usize, steps: usize) -> Result<(), String> {
+pub fn run_part(scene: &Scene, part: usize, steps: usize) -> Result<(), Error> {
+    fn go<T: Real + 'static>(scene: &Scene, part: usize, steps: usize) -> Result<(), Error> {
         let plan = plan::<T>(scene)?;
         let (inputs, x0) = inputs::<T>(scene, steps, steps);
-        let timer = plan
-            .timers
-            .get(part)
-            .ok_or_else(|| format!("no part {part} (the scene has {})", plan.layout.len))?;
+        let timer = plan.timers.get(part).ok_or(Error::NoPart {
+            part,
+            len: plan.layout.len,
+        })?;
         black_box(timer(&inputs, x0));
         Ok(())
     }
@@ -240,6 +277,12 @@ pub fn run_part(scene: &Scene, part: usize, steps: usize) -> Result<(), String> 
         NumberType::F32 => go::<f32>(scene, part, steps),
         NumberType::F64 => go::<f64>(scene, part, steps),
     }
+}
+
+/// [`run_part`] on the scene read from `scene_file`: the whole
+/// [`PART_COMMAND`].
+pub fn run_part_of(scene_file: &Path, part: usize, steps: usize) -> Result<(), Error> {
+    run_part(&Scene::load(scene_file)?, part, steps)
 }
 
 /// Name of the function that steps every part (for callgrind's
@@ -260,12 +303,17 @@ fn timer<T: Real + 'static, B: Backbone<T> + 'static, E: Effect<T> + 'static>(
 }
 
 /// The scene `scene` with `effects` only, compiled as `run` compiles it.
-fn compiled<T: Real + 'static>(scene: &Scene, effects: &[EffectDesc]) -> Result<Timer<T>, String> {
+fn compiled<T: Real + 'static>(scene: &Scene, effects: &[EffectDesc]) -> Result<Timer<T>, Error> {
     let sub = Scene {
         effects: effects.to_vec(),
         ..scene.clone()
     };
-    let model = model::compile::<T>(&sub).map_err(|e| e.to_string())?;
+    let what = match effects {
+        [] => "the scene's backbone alone".to_string(),
+        [one] if scene.effects.len() > 1 => format!("the scene with {} only", one.name()),
+        _ => "the scene".to_string(),
+    };
+    let model = model::compile::<T>(&sub).map_err(refused(what))?;
     Ok(Box::new(move |inputs, x0| {
         per_step(model.time_steps(inputs, x0), inputs)
     }))
@@ -343,18 +391,20 @@ struct Plan<T> {
     layout: Layout,
 }
 
-fn plan<T: Real + 'static>(scene: &Scene) -> Result<Plan<T>, String> {
+fn plan<T: Real + 'static>(scene: &Scene) -> Result<Plan<T>, Error> {
     let shape = model::compile::<T>(scene)
-        .map_err(|e| e.to_string())?
+        .map_err(refused("the scene"))?
         .shape();
-    let backbone = model::backbone::<T>(&scene.backbone).map_err(|e| e.to_string())?;
+    let backbone =
+        model::backbone::<T>(&scene.backbone).map_err(refused("the scene's backbone"))?;
     let mut timers: Vec<Timer<T>> = vec![compiled(scene, &scene.effects)?, compiled(scene, &[])?];
     for effect in &scene.effects {
         timers.push(compiled(scene, std::slice::from_ref(effect))?);
     }
     let mut comparisons = Vec::new();
     if shape == Shape::One {
-        let list: SceneBushing<T> = model::build(scene).map_err(|e| e.to_string())?;
+        let list: SceneBushing<T> =
+            model::build(scene).map_err(refused("the scene as an effect list"))?;
         comparisons.push((
             "the whole scene as an effect list (model::build)".to_string(),
             false,
@@ -448,10 +498,7 @@ impl Layout {
     }
 }
 
-fn cost_typed<T: Real + 'static>(
-    scene: &Scene,
-    options: CostOptions,
-) -> Result<CostReport, String> {
+fn cost_typed<T: Real + 'static>(scene: &Scene, options: CostOptions) -> Result<CostReport, Error> {
     let plan = plan::<T>(scene)?;
     let (inputs, x0) = inputs::<T>(scene, options.min_steps, options.max_steps);
     let mut best = vec![f64::INFINITY; plan.timers.len()];

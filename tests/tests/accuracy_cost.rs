@@ -221,17 +221,23 @@ fn bad_firmware_lines_are_named_errors() {
         "broken.txt".into(),
         "kernel target=m4f type=f32 family=maxwell name=x n=eight per_call=1\n".into(),
     ));
-    let e = accuracy_cost::generate(&bad, &Options::quick()).unwrap_err();
+    let e = accuracy_cost::generate(&bad, &Options::quick())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("broken.txt:1") && e.contains("n=eight"), "{e}");
 
     let mut dup = inputs();
     dup.kernels.push(("again.txt".into(), KERNELS_M3.into()));
-    let e = accuracy_cost::generate(&dup, &Options::quick()).unwrap_err();
+    let e = accuracy_cost::generate(&dup, &Options::quick())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("again.txt:1") && e.contains("m3.txt:1"), "{e}");
 
     let mut elf = inputs();
     elf.elfs
         .push(("thumbv7em-none-eabihf".into(), b"not an elf".to_vec()));
-    let e = accuracy_cost::generate(&elf, &Options::quick()).unwrap_err();
+    let e = accuracy_cost::generate(&elf, &Options::quick())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("thumbv7em-none-eabihf"), "{e}");
 }

@@ -26,7 +26,14 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 /// The workspace crates, relative to the workspace root.
-const CRATES: &[&str] = &["core-nostd", "host-sim", "board-examples", "tests", "fuzz"];
+const CRATES: &[&str] = &[
+    "core-nostd",
+    "kernels",
+    "host-sim",
+    "board-examples",
+    "tests",
+    "fuzz",
+];
 /// Directories (relative to a crate) whose `.rs` files are crate roots.
 const ROOT_DIRS: &[&str] = &["src/bin", "tests", "benches", "examples", "fuzz_targets"];
 

@@ -431,8 +431,8 @@ fn a_one_effect_scene_is_costed_as_its_own_bushing_type_and_as_a_list() {
     // The hidden child command of `cost --instructions` refuses a part
     // the plan does not have.
     let err = cost::run_part(&scene, 5, 10).unwrap_err();
-    assert_eq!(err, "no part 5 (the scene has 5)");
-    assert_eq!(cost::run_part(&scene, 4, 10), Ok(()));
+    assert_eq!(err.to_string(), "no part 5 (the scene has 5)");
+    assert!(cost::run_part(&scene, 4, 10).is_ok());
 }
 
 /// The trace of `scene`: header and rows.

@@ -76,10 +76,10 @@ mod firmware {
         ADC_BITS, AMPLITUDE_MM, LSB_MM, Monitor, RATE_HZ, Sample, TRACKER_NOISE_MM, rig_bushing,
         tracker_tuning,
     };
-    use bushing_boards::{
-        CELLS, DT, JENKINS, drives, engine_mount_scaled, jenkins, memory, mount_motion,
+    use bushing_boards::{memory, probe};
+    use bushing_kernels::{
+        CELLS, DT, JENKINS, drives, engine_mount_scaled, jenkins, mount_motion, sine,
     };
-    use bushing_boards::{probe, sine};
     use cortex_m_rt::entry;
     use cortex_m_semihosting::hprintln;
     #[cfg(feature = "panic-never")]

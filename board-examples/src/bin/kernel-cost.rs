@@ -42,7 +42,7 @@ mod firmware {
         ShiftFactor,
     };
     use bushing_boards::probe::{self, INSTRUCTIONS_PER_TICK, ticks};
-    use bushing_boards::{
+    use bushing_kernels::{
         DT, IwanOscillator, MountEffects, berg, bouc_wen, composite, dahl, default_bushing, drives,
         engine_mount, grunwald, iwan_bank, iwan_oscillator, jenkins, maxwell_bank, mount_motion,
         polynomial, sine, spline, sts16, xf2,
@@ -339,7 +339,7 @@ mod firmware {
         );
     }
 
-    type Mount = bushing_boards::Mount<f32>;
+    type Mount = bushing_kernels::Mount<f32>;
     type MountState = SixDofState<f32, <MountEffects<f32> as Effect<f32>>::State>;
 
     /// One 6-DOF step, returning the node loads.

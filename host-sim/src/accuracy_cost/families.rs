@@ -2,7 +2,7 @@
 //! each against a reference that is not the code under test.
 //!
 //! The kernels are those of the `kernel-cost` firmware (the constructors
-//! of `bushing_boards`, or the same library constructors with the same
+//! of `bushing_kernels`, or the same library constructors with the same
 //! numbers where the firmware builds them inline); the cost of each row is
 //! joined afterwards through its [`Cost`] keys.
 
@@ -14,9 +14,9 @@ use bushing::{
     Accumulator, Bushing, Compensated, Drive, Effect, MaxwellBank, MaxwellForm, MaxwellSpec,
     Multiplied, ParamError, Plain, Polynomial, Real, XfBank, XfForm, XfSpec,
 };
-use bushing_boards::DT;
+use bushing_kernels::DT;
 
-use super::{Cost, Key, Options, Row};
+use super::{Cost, Error, Key, Options, Row, refused};
 use crate::fractional_report::{self, RetunePath};
 use crate::{fit, iwan_report, xf_report};
 
@@ -36,7 +36,7 @@ pub const FIT_CELLS: [usize; 3] = [4, 8, 16];
 /// The fractional band of the comparison, Hz: four decades around the
 /// firmware's transition frequency of 1 Hz.
 pub const FRACTIONAL_BAND_HZ: (f64, f64) = (0.01, 100.0);
-/// The backbone of the firmware's drives (`bushing_boards::polynomial`):
+/// The backbone of the firmware's drives (`bushing_kernels::polynomial`):
 /// coefficients of x^0..x^3 (N, mm) and its range.
 pub const BACKBONE: ([f64; 4], (f64, f64)) = ([0.0, 150.0, 0.0, 4.0], (-6.0, 6.0));
 /// The x_f cell of the firmware (corner 5 Hz, g = 0.1, x_f = 0.02 mm).
@@ -66,8 +66,10 @@ impl<T> StateName for Compensated<T> {
 }
 
 /// The corner frequencies of the firmware's `N`-cell Maxwell bank.
-pub fn maxwell_specs<const N: usize>() -> Result<[MaxwellSpec; N], ParamError> {
-    Ok(*bushing_boards::maxwell_bank::<f32, N, Plain<f32>>(MaxwellForm::RateExactRamp)?.specs())
+pub fn maxwell_specs<const N: usize>() -> Result<[MaxwellSpec; N], Error> {
+    let bank = bushing_kernels::maxwell_bank::<f32, N, Plain<f32>>(MaxwellForm::RateExactRamp)
+        .map_err(refused(format!("the firmware's {N}-cell Maxwell bank")))?;
+    Ok(*bank.specs())
 }
 
 /// The working type's name in the report: `fixed` for `Q16` (I16F16),
@@ -159,8 +161,8 @@ fn band_text(freqs: &[f64]) -> String {
 fn maxwell_rows<T: Real, A: Accumulator<T> + StateName, const N: usize>(
     options: &Options,
     rows: &mut Vec<Row>,
-) -> Result<(), String> {
-    let specs = maxwell_specs::<N>().map_err(|e| e.to_string())?;
+) -> Result<(), Error> {
+    let specs = maxwell_specs::<N>()?;
     let freqs: &[f64] = if options.quick {
         &MAXWELL_FREQUENCIES_QUICK
     } else {
@@ -186,7 +188,7 @@ fn maxwell_rows<T: Real, A: Accumulator<T> + StateName, const N: usize>(
 
 /// Every Maxwell row: forms × orders × {f64, f32, fixed (Q16)} × {plain,
 /// multiplied, compensated}. A further number type is one more line.
-fn maxwell(options: &Options, rows: &mut Vec<Row>) -> Result<(), String> {
+fn maxwell(options: &Options, rows: &mut Vec<Row>) -> Result<(), Error> {
     macro_rules! orders {
         ($t:ty, $a:ident) => {
             maxwell_rows::<$t, $a<$t>, 1>(options, rows)?;
@@ -210,8 +212,8 @@ fn maxwell(options: &Options, rows: &mut Vec<Row>) -> Result<(), String> {
 }
 
 /// The firmware's fractional law (its Grünwald cell's spec).
-fn fractional_spec() -> Result<bushing::FractionalSpec, String> {
-    let b = bushing_boards::grunwald::<16>().map_err(|e| e.to_string())?;
+fn fractional_spec() -> Result<bushing::FractionalSpec, Error> {
+    let b = bushing_kernels::grunwald::<16>().map_err(refused("the firmware's Grünwald cell"))?;
     Ok(b.effects().0.spec())
 }
 
@@ -226,12 +228,14 @@ fn fractional_band() -> (f64, f64) {
 fn fitted_bank_error<const M: usize>(
     spec: &bushing::FractionalSpec,
     cells: &[MaxwellSpec],
-) -> Result<f64, String> {
-    let cells: &[MaxwellSpec; M] = cells
-        .try_into()
-        .map_err(|_| format!("the fit returned {} cells, not {M}", cells.len()))?;
-    let bank = MaxwellBank::<f32, M>::new(MaxwellForm::RateExactRamp, cells, DT)
-        .map_err(|e| e.to_string())?;
+) -> Result<f64, Error> {
+    let cells: &[MaxwellSpec; M] = cells.try_into().map_err(|_| Error::FitCells {
+        asked: M,
+        got: cells.len(),
+    })?;
+    let bank = MaxwellBank::<f32, M>::new(MaxwellForm::RateExactRamp, cells, DT).map_err(
+        refused(format!("the {M}-cell bank fitted to the fractional law")),
+    )?;
     let g0 = 1.0 - cells.iter().map(|c| c.g).sum::<f64>();
     let (lo, hi) = fractional_band();
     let mut worst = 0.0f64;
@@ -246,7 +250,7 @@ fn fitted_bank_error<const M: usize>(
 }
 
 /// Grünwald N against Maxwell banks of M cells fitted to the same law.
-fn fractional(options: &Options, rows: &mut Vec<Row>) -> Result<(), String> {
+fn fractional(options: &Options, rows: &mut Vec<Row>) -> Result<(), Error> {
     let spec = fractional_spec()?;
     let (lo, hi) = fractional_band();
     let (flo, fhi) = FRACTIONAL_BAND_HZ;
@@ -282,7 +286,11 @@ fn fractional(options: &Options, rows: &mut Vec<Row>) -> Result<(), String> {
     };
     for &m in cells {
         // The fit is made at ω_c = 1 rad/s; move it to the firmware's ω_c.
-        let fitted = fractional_report::fit_fractional(spec.alpha, m).map_err(|e| e.to_string())?;
+        let fitted =
+            fractional_report::fit_fractional(spec.alpha, m).map_err(|source| Error::Fit {
+                what: format!("the {m}-cell fit to the fractional law"),
+                source,
+            })?;
         let scaled: Vec<MaxwellSpec> = fitted
             .cells
             .iter()
@@ -292,7 +300,7 @@ fn fractional(options: &Options, rows: &mut Vec<Row>) -> Result<(), String> {
             4 => fitted_bank_error::<4>(&spec, &scaled)?,
             8 => fitted_bank_error::<8>(&spec, &scaled)?,
             16 => fitted_bank_error::<16>(&spec, &scaled)?,
-            _ => return Err(format!("no fitted bank of {m} cells")),
+            _ => return Err(Error::FitOrder(m)),
         };
         rows.push(Row::new(
             Key::new("fractional-fit", "rate-exact-ramp/plain", m, "f32"),
@@ -309,15 +317,17 @@ fn fractional(options: &Options, rows: &mut Vec<Row>) -> Result<(), String> {
 
 /// Iwan banks of N Jenkins cells against the continuous STS and
 /// Segalman laws, uniform and logarithmic placement.
-fn iwan(rows: &mut Vec<Row>) -> Result<(), String> {
+fn iwan(rows: &mut Vec<Row>) -> Result<(), Error> {
     let (f_s, k_t, chi, beta) = iwan_report::SEGALMAN;
     let phi_max = Segalman::new(f_s, k_t, chi, beta)
-        .map_err(|e| e.to_string())?
+        .map_err(refused("the Segalman law of the Iwan table"))?
         .phi_max();
     for n in iwan_report::ORDERS {
         let cost = Cost::One(Key::new("iwan", "clamp/log", n, "f32"));
         for (name, placement) in iwan_report::PLACEMENTS {
-            let error = iwan_report::sts_error(n, placement).map_err(|e| e.to_string())?;
+            let error = iwan_report::sts_error(n, placement).map_err(refused(format!(
+                "the {n}-cell Iwan bank ({name}) against STS"
+            )))?;
             rows.push(Row::new(
                 Key::new("iwan-sts", name, n, "f32"),
                 Some(error),
@@ -328,8 +338,9 @@ fn iwan(rows: &mut Vec<Row>) -> Result<(), String> {
         for (name, placement) in iwan_report::SEGALMAN_PLACEMENTS {
             let mut worst = 0.0f64;
             for frac in iwan_report::AMPLITUDES {
-                let e = iwan_report::segalman_error(n, placement, frac * phi_max)
-                    .map_err(|e| e.to_string())?;
+                let e = iwan_report::segalman_error(n, placement, frac * phi_max).map_err(
+                    refused(format!("the {n}-cell Iwan bank ({name}) against Segalman")),
+                )?;
                 worst = worst.max(e.abs());
             }
             rows.push(Row::new(
@@ -518,8 +529,11 @@ fn tracker_rows<T: Real>(options: &Options, rows: &mut Vec<Row>) {
 
 /// Re-tuning an 8-cell bank in f32: libm and micromath exponentials, and
 /// the f64 path rounded to f32.
-fn retune(rows: &mut Vec<Row>) -> Result<(), String> {
-    let specs = fractional_report::retune_bank().map_err(|e| e.to_string())?;
+fn retune(rows: &mut Vec<Row>) -> Result<(), Error> {
+    let specs = fractional_report::retune_bank().map_err(|source| Error::Fit {
+        what: "the 8-cell bank to re-tune".into(),
+        source,
+    })?;
     for (name, path) in [
         ("retune-8/libm", RetunePath::Libm),
         ("retune-8/micromath", RetunePath::Micromath),
@@ -527,8 +541,9 @@ fn retune(rows: &mut Vec<Row>) -> Result<(), String> {
     ] {
         let mut worst = 0.0f64;
         for a_t in fractional_report::RETUNE_SHIFTS {
-            let (es, el) =
-                fractional_report::retune_error(&specs, a_t, path).map_err(|e| e.to_string())?;
+            let (es, el) = fractional_report::retune_error(&specs, a_t, path).map_err(refused(
+                format!("the bank re-tuned to a_T = {a_t} ({name})"),
+            ))?;
             worst = worst.max(es).max(el);
         }
         let key = Key::new("retune", name, 8, "f32");
@@ -561,7 +576,7 @@ fn cost_only(rows: &mut Vec<Row>) {
 }
 
 /// Every row of the report, errors computed, costs not yet joined.
-pub fn rows(options: &Options) -> Result<Vec<Row>, String> {
+pub fn rows(options: &Options) -> Result<Vec<Row>, Error> {
     let mut rows = Vec::new();
     maxwell(options, &mut rows)?;
     fractional(options, &mut rows)?;

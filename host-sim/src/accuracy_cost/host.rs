@@ -9,8 +9,6 @@
 
 use std::collections::BTreeMap;
 use std::hint::black_box;
-use std::path::Path;
-use std::process::{Command, Stdio};
 use std::time::Instant;
 
 use bushing::tracker::{Filter, UtParams};
@@ -18,10 +16,11 @@ use bushing::{
     Accumulator, Backbone, Bushing, Compensated, Drive, Effect, LibmExp, MaxwellBank, MaxwellForm,
     MicromathExp, Multiplied, Plain, Real, XfBank, XfForm, XfSpec,
 };
-use bushing_boards::DT;
+use bushing_kernels::DT;
 
-use super::Key;
 use super::families::{StateName, XF_CELL, maxwell_specs, type_label};
+use super::{Error, Key, refused};
+use crate::cost::callgrind;
 
 /// Calls of one pass: the firmware's sine length.
 pub const CALLS: usize = 2000;
@@ -36,16 +35,16 @@ pub struct HostKernel {
 
 fn sine() -> Vec<f32> {
     let (amplitude, period) = super::families::SINE;
-    bushing_boards::sine::<f32, CALLS>(amplitude, period).to_vec()
+    bushing_kernels::sine::<f32, CALLS>(amplitude, period).to_vec()
 }
 
 /// The drives of the firmware's sine on its polynomial backbone, in `T`
 /// (widened from the f32 ones).
-pub fn drives<T: Real>() -> Result<Vec<Drive<T>>, String> {
-    let poly = bushing_boards::polynomial::<f32>().map_err(|e| e.to_string())?;
-    let xs = bushing_boards::sine::<f32, CALLS>(super::families::SINE.0, super::families::SINE.1);
+pub fn drives<T: Real>() -> Result<Vec<Drive<T>>, Error> {
+    let poly = bushing_kernels::polynomial::<f32>().map_err(refused("the firmware's backbone"))?;
+    let xs = bushing_kernels::sine::<f32, CALLS>(super::families::SINE.0, super::families::SINE.1);
     let to = |v: f32| T::from_f64(f64::from(v));
-    Ok(bushing_boards::drives(&poly, &xs)
+    Ok(bushing_kernels::drives(&poly, &xs)
         .iter()
         .map(|d| Drive {
             x: to(d.x),
@@ -106,12 +105,15 @@ fn bushing_kernel<T: Real + 'static, B: Backbone<T> + 'static, E: Effect<T> + 's
 
 fn maxwell_kernels<T: Real + 'static, A: Accumulator<T> + StateName + 'static, const N: usize>(
     out: &mut Vec<HostKernel>,
-) -> Result<(), String> {
-    let specs = maxwell_specs::<N>().map_err(|e| e.to_string())?;
+) -> Result<(), Error> {
+    let specs = maxwell_specs::<N>()?;
     let d = drives::<T>()?;
     for form in MaxwellForm::ALL {
-        let bank = MaxwellBank::<T, N, A>::new(form, &specs, DT).map_err(|e| e.to_string())?;
         let name = format!("{}/{}", form.name(), A::NAME);
+        let bank = MaxwellBank::<T, N, A>::new(form, &specs, DT).map_err(refused(format!(
+            "the {N}-cell Maxwell bank {name} in {}",
+            type_label::<T>()
+        )))?;
         out.push(effect_kernel(
             Key::new("maxwell", &name, N, type_label::<T>()),
             bank.clone(),
@@ -128,8 +130,9 @@ fn maxwell_kernels<T: Real + 'static, A: Accumulator<T> + StateName + 'static, c
     Ok(())
 }
 
-fn iwan_kernel<const N: usize>(out: &mut Vec<HostKernel>) -> Result<(), String> {
-    let bank = bushing_boards::iwan_bank::<f32, N>().map_err(|e| e.to_string())?;
+fn iwan_kernel<const N: usize>(out: &mut Vec<HostKernel>) -> Result<(), Error> {
+    let bank = bushing_kernels::iwan_bank::<f32, N>()
+        .map_err(refused(format!("the firmware's {N}-cell Iwan bank")))?;
     out.push(effect_kernel(
         Key::new("iwan", "clamp/log", N, "f32"),
         bank,
@@ -139,8 +142,9 @@ fn iwan_kernel<const N: usize>(out: &mut Vec<HostKernel>) -> Result<(), String> 
     Ok(())
 }
 
-fn grunwald_kernel<const N: usize>(out: &mut Vec<HostKernel>) -> Result<(), String> {
-    let b = bushing_boards::grunwald::<N>().map_err(|e| e.to_string())?;
+fn grunwald_kernel<const N: usize>(out: &mut Vec<HostKernel>) -> Result<(), Error> {
+    let b = bushing_kernels::grunwald::<N>()
+        .map_err(refused(format!("the firmware's {N}-tap Grünwald cell")))?;
     out.push(bushing_kernel(
         Key::new("grunwald", "bushing/alpha-0.5", N, "f32"),
         b,
@@ -149,14 +153,15 @@ fn grunwald_kernel<const N: usize>(out: &mut Vec<HostKernel>) -> Result<(), Stri
     Ok(())
 }
 
-fn xf_kernels<T: Real + 'static>(out: &mut Vec<HostKernel>) -> Result<(), String> {
+fn xf_kernels<T: Real + 'static>(out: &mut Vec<HostKernel>) -> Result<(), Error> {
     let (f, g, x_f) = XF_CELL;
     for (form, name) in [
         (XfForm::Midpoint, "midpoint"),
         (XfForm::ExactRamp, "exact-ramp"),
     ] {
-        let bank =
-            XfBank::<T, 1>::new(form, &[XfSpec::hz(f, g, x_f)], DT).map_err(|e| e.to_string())?;
+        let bank = XfBank::<T, 1>::new(form, &[XfSpec::hz(f, g, x_f)], DT).map_err(refused(
+            format!("the firmware's x_f cell ({name}) in {}", type_label::<T>()),
+        ))?;
         out.push(effect_kernel(
             Key::new("xf", name, 1, type_label::<T>()),
             bank,
@@ -169,12 +174,15 @@ fn xf_kernels<T: Real + 'static>(out: &mut Vec<HostKernel>) -> Result<(), String
 
 /// The firmware's tracker: one mode at 20 Hz, one accelerometer, 1 kHz,
 /// fed a 20 Hz sine by a rotation recurrence.
-fn tracker_kernels<T: Real + 'static>(out: &mut Vec<HostKernel>) -> Result<(), String> {
+fn tracker_kernels<T: Real + 'static>(out: &mut Vec<HostKernel>) -> Result<(), Error> {
     for (name, filter) in [
         ("ekf/1-mode-1-acc", Filter::Ekf),
         ("ukf/1-mode-1-acc", Filter::Ukf(UtParams::default())),
     ] {
-        let tracker = bushing_boards::modal_tracker::<T>(filter).map_err(|e| e.to_string())?;
+        let tracker = bushing_kernels::modal_tracker::<T>(filter).map_err(refused(format!(
+            "the firmware's tracker ({name}) in {}",
+            type_label::<T>()
+        )))?;
         let mut state = tracker.start();
         let (c, s) = (
             T::from_f64((std::f64::consts::TAU * 0.02).cos()),
@@ -197,15 +205,15 @@ fn tracker_kernels<T: Real + 'static>(out: &mut Vec<HostKernel>) -> Result<(), S
 }
 
 /// Re-tuning the firmware's 8-cell bank, a_T from 1 upwards.
-fn retune_kernels(out: &mut Vec<HostKernel>) -> Result<(), String> {
+fn retune_kernels(out: &mut Vec<HostKernel>) -> Result<(), Error> {
     for (name, path) in [
         ("retune-8/libm", 0u8),
         ("retune-8/micromath", 1),
         ("retune-8/f64-shifted", 2),
     ] {
         let mut bank =
-            bushing_boards::maxwell_bank::<f32, 8, Plain<f32>>(MaxwellForm::RateExactRamp)
-                .map_err(|e| e.to_string())?;
+            bushing_kernels::maxwell_bank::<f32, 8, Plain<f32>>(MaxwellForm::RateExactRamp)
+                .map_err(refused("the firmware's 8-cell bank to re-tune"))?;
         let mut k = 0u32;
         out.push(HostKernel {
             key: Key::new("retune", name, 8, "f32"),
@@ -229,7 +237,7 @@ fn retune_kernels(out: &mut Vec<HostKernel>) -> Result<(), String> {
 }
 
 /// Every host kernel, in a fixed order.
-pub fn kernels() -> Result<Vec<HostKernel>, String> {
+pub fn kernels() -> Result<Vec<HostKernel>, Error> {
     let mut out = Vec::new();
     macro_rules! maxwell {
         ($t:ty) => {
@@ -258,26 +266,27 @@ pub fn kernels() -> Result<Vec<HostKernel>, String> {
     xf_kernels::<f64>(&mut out)?;
     xf_kernels::<f32>(&mut out)?;
     let s = sine();
-    let poly = bushing_boards::polynomial::<f32>().map_err(|e| e.to_string())?;
-    let spline = bushing_boards::spline::<f32>().map_err(|e| e.to_string())?;
+    let poly =
+        bushing_kernels::polynomial::<f32>().map_err(refused("the firmware's polynomial"))?;
+    let spline = bushing_kernels::spline::<f32>().map_err(refused("the firmware's spline"))?;
     out.push(bushing_kernel(
         Key::new("backbone", "polynomial-4", 1, "f32"),
-        Bushing::new(poly, ()).map_err(|e| e.to_string())?,
+        Bushing::new(poly, ()).map_err(refused("the polynomial backbone alone"))?,
         s.clone(),
     ));
     out.push(bushing_kernel(
         Key::new("backbone", "spline-8", 1, "f32"),
-        Bushing::new(spline, ()).map_err(|e| e.to_string())?,
+        Bushing::new(spline, ()).map_err(refused("the spline backbone alone"))?,
         s.clone(),
     ));
     out.push(bushing_kernel(
         Key::new("bushing", "default/spline+4maxwell+3jenkins", 7, "f32"),
-        bushing_boards::default_bushing::<f32>().map_err(|e| e.to_string())?,
+        bushing_kernels::default_bushing::<f32>().map_err(refused("the default bushing"))?,
         s.clone(),
     ));
     out.push(bushing_kernel(
         Key::new("sts", "stack-16", 16, "f32"),
-        bushing_boards::sts16().map_err(|e| e.to_string())?,
+        bushing_kernels::sts16().map_err(refused("the STS stack"))?,
         s,
     ));
     grunwald_kernel::<16>(&mut out)?;
@@ -336,11 +345,15 @@ pub fn accuracy_cost_dumped(pass: &mut dyn FnMut(usize), calls: usize) -> usize 
     black_box(accuracy_cost_collected(pass, calls))
 }
 
-/// The hidden `accuracy-cost-part CALLS` command, run under callgrind:
-/// prints each kernel's key, warms it up, then runs one pass of `calls`
-/// calls inside [`accuracy_cost_collected`] (one callgrind dump each, on
-/// leaving [`accuracy_cost_dumped`]).
-pub fn run_part(calls: usize) -> Result<(), String> {
+/// The hidden command that counts every kernel under callgrind:
+/// `PART_COMMAND CALLS` ([`run_part`]).
+pub const PART_COMMAND: &str = "accuracy-cost-part";
+
+/// The hidden [`PART_COMMAND`], run under callgrind: prints each kernel's
+/// key, warms it up, then runs one pass of `calls` calls inside
+/// [`accuracy_cost_collected`] (one callgrind dump each, on leaving
+/// [`accuracy_cost_dumped`]).
+pub fn run_part(calls: usize) -> Result<(), Error> {
     let mut kernels = kernels()?;
     for k in &mut kernels {
         println!("{}", k.key.to_word());
@@ -350,62 +363,26 @@ pub fn run_part(calls: usize) -> Result<(), String> {
     Ok(())
 }
 
-/// Whether `valgrind` can be started.
-pub fn valgrind_available() -> bool {
-    Command::new("valgrind")
-        .arg("--version")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
 /// Host instructions per call of every kernel: this program's hidden
-/// `accuracy-cost-part` command under callgrind, counting only
+/// [`PART_COMMAND`] under callgrind, counting only
 /// [`accuracy_cost_collected`] and dumping after each of its calls.
-pub fn instructions(calls: usize, work: &Path) -> Result<BTreeMap<Key, f64>, String> {
-    let exe = std::env::current_exe().map_err(|e| format!("cannot find this program: {e}"))?;
-    let dir = work.join(format!("callgrind-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let base = dir.join("cg.out");
-    let output = Command::new("valgrind")
-        .arg("--tool=callgrind")
-        .arg(format!("--callgrind-out-file={}", base.display()))
-        .arg("--toggle-collect=*accuracy_cost_collected*")
-        .arg("--dump-after=*accuracy_cost_dumped*")
-        .arg(&exe)
-        .args(["accuracy-cost-part", &calls.to_string()])
-        .stderr(Stdio::null())
-        .output()
-        .map_err(|e| format!("cannot start valgrind: {e}"))?;
-    if !output.status.success() {
-        return Err(format!("valgrind failed: {}", output.status));
+pub fn instructions(calls: usize) -> Result<BTreeMap<Key, f64>, Error> {
+    let args = [PART_COMMAND.into(), calls.to_string().into()];
+    let counted = callgrind::count(
+        &args,
+        "accuracy_cost_collected",
+        Some("accuracy_cost_dumped"),
+    )?;
+    let keys: Vec<Key> = counted.stdout.lines().filter_map(Key::from_word).collect();
+    if counted.totals.len() < keys.len() {
+        return Err(Error::MissingDumps {
+            kernels: keys.len(),
+            dumps: counted.totals.len(),
+        });
     }
-    let keys: Vec<Key> = String::from_utf8_lossy(&output.stdout)
-        .lines()
-        .filter_map(Key::from_word)
-        .collect();
-    let mut out = BTreeMap::new();
-    for (i, key) in keys.into_iter().enumerate() {
-        let file = dir.join(format!("cg.out.{}", i + 1));
-        let text =
-            std::fs::read_to_string(&file).map_err(|e| format!("{}: {e}", file.display()))?;
-        let total = callgrind_total(&text)
-            .ok_or_else(|| format!("{}: no instruction total", file.display()))?;
-        out.insert(key, total as f64 / calls.max(1) as f64);
-    }
-    std::fs::remove_dir_all(&dir).ok();
-    Ok(out)
-}
-
-/// The event total of a callgrind dump (its `totals:` or `summary:` line;
-/// the first event is the instruction count).
-fn callgrind_total(text: &str) -> Option<u64> {
-    for line in text.lines() {
-        let mut words = line.split_whitespace();
-        if matches!(words.next(), Some("totals:" | "summary:")) {
-            return words.next()?.parse().ok();
-        }
-    }
-    None
+    Ok(keys
+        .into_iter()
+        .zip(counted.totals)
+        .map(|(key, total)| (key, total as f64 / calls.max(1) as f64))
+        .collect())
 }

@@ -51,6 +51,68 @@ fn cell(s: &str) -> String {
     s.replace('|', "\\|")
 }
 
+/// The writer of every table of the report: a Markdown table of a header
+/// row, a `|---|` rule and one line per row, each cell as given with `|`
+/// escaped. The columns are not padded to a common width (a long note
+/// would widen every line of its column), so each line reads as written.
+struct Table {
+    text: String,
+    columns: usize,
+}
+
+impl Table {
+    /// A table of these column titles.
+    fn new<S: AsRef<str>>(header: impl IntoIterator<Item = S>) -> Self {
+        let mut table = Self {
+            text: String::new(),
+            columns: 0,
+        };
+        table.columns = table.line(header);
+        table.text.push('|');
+        table.text.push_str(&"---|".repeat(table.columns));
+        table.text.push('\n');
+        table
+    }
+
+    /// Appends one row.
+    fn row<S: AsRef<str>>(&mut self, cells: impl IntoIterator<Item = S>) {
+        let n = self.line(cells);
+        debug_assert_eq!(
+            n, self.columns,
+            "a row of {n} cells in a table of {}",
+            self.columns
+        );
+    }
+
+    /// Writes `| a | b |` and a newline; returns the number of cells.
+    fn line<S: AsRef<str>>(&mut self, cells: impl IntoIterator<Item = S>) -> usize {
+        self.text.push('|');
+        let mut n = 0;
+        for c in cells {
+            self.text.push(' ');
+            self.text.push_str(&cell(c.as_ref()));
+            self.text.push_str(" |");
+            n += 1;
+        }
+        self.text.push('\n');
+        n
+    }
+
+    /// The table's text, each line ended by a newline.
+    fn finish(self) -> String {
+        self.text
+    }
+}
+
+/// The columns of the cheapest-configuration tables after the first.
+const CHEAPEST_COLUMNS: [&str; 5] = [
+    "configuration",
+    "error",
+    "M4F instr",
+    "host ns",
+    "error measure",
+];
+
 /// A line of the M4F output, for the targets.
 fn m4f<'a>(lines: &'a mut Lines, family: &str, name: &str, n: usize) -> Option<&'a KernelLine> {
     lines.get("m4f", &Key::new(family, name, n, "f32"))
@@ -292,7 +354,7 @@ fn cheapest<'a>(rows: impl Iterator<Item = &'a Row> + Clone) -> Option<(&'a Row,
         .or_else(|| by(|r| r.host_ns).map(|r| (r, false)))
 }
 
-fn cheapest_line(s: &mut String, label: &str, rows: &[&Row]) {
+fn cheapest_line(table: &mut Table, label: &str, rows: &[&Row]) {
     let best = rows
         .iter()
         .copied()
@@ -303,32 +365,30 @@ fn cheapest_line(s: &mut String, label: &str, rows: &[&Row]) {
                 .total_cmp(&b.error.unwrap_or(f64::INFINITY))
         });
     match cheapest(rows.iter().copied()) {
-        Some((r, on_m4f)) => {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {} | {} |",
-                cell(label),
-                cell(&config(r)),
-                pct(r.error),
-                if on_m4f {
-                    sig(r.m4f.unwrap_or(f64::NAN))
-                } else {
-                    "- (not on M4F)".into()
-                },
-                num(r.host_ns, 1),
-                cell(&r.measure)
-            );
-        }
-        None => {
-            let _ = writeln!(
-                s,
-                "| {} | none within 1 % (best: {} at {}) | - | - | - | {} |",
-                cell(label),
-                best.map_or_else(|| "-".into(), |r| cell(&config(r))),
-                pct(best.and_then(|r| r.error)),
-                best.map_or_else(String::new, |r| cell(&r.measure))
-            );
-        }
+        Some((r, on_m4f)) => table.row([
+            label.to_string(),
+            config(r),
+            pct(r.error),
+            if on_m4f {
+                sig(r.m4f.unwrap_or(f64::NAN))
+            } else {
+                "- (not on M4F)".into()
+            },
+            num(r.host_ns, 1),
+            r.measure.clone(),
+        ]),
+        None => table.row([
+            label.to_string(),
+            format!(
+                "none within 1 % (best: {} at {})",
+                best.map_or_else(|| "-".into(), config),
+                pct(best.and_then(|r| r.error))
+            ),
+            "-".into(),
+            "-".into(),
+            "-".into(),
+            best.map_or_else(String::new, |r| r.measure.clone()),
+        ]),
     }
 }
 
@@ -337,7 +397,7 @@ fn about(family: &str) -> (&'static str, &'static str) {
     match family {
         "maxwell" => (
             "Maxwell banks (full step: force, tangent, dissipated energy)",
-            "The firmware's banks (`bushing_boards::maxwell_bank::<N, A>(form)`: N corners spread \
+            "The firmware's banks (`bushing_kernels::maxwell_bank::<N, A>(form)`: N corners spread \
              evenly in log frequency over 0.01-100 Hz, total fraction 0.5, 2 kHz) in every form and \
              state storage (`plain`: the decrement d = -expm1(-h) stored, F - d F; `multiplied`: \
              e^-h F; `compensated`: plain with a Fast2Sum word). Error: the bank stepped on a linear \
@@ -395,7 +455,7 @@ fn about(family: &str) -> (&'static str, &'static str) {
         ),
         "six-dof" => (
             "6-DOF bushing: attached against invariant connectivity (cost only)",
-            "One engine mount (`bushing_boards::engine_mount`: six axis laws of a hardening \
+            "One engine mount (`bushing_kernels::engine_mount`: six axis laws of a hardening \
              polynomial, 2 Maxwell and 3 Jenkins cells, attached 20 mm from each node) stepped over \
              its motion (`mount_motion`: up to 1 mm and 0.02 rad), node loads returned. The invariant \
              form adds the mid frame (a square root, a division, a quaternion product and the arm \
@@ -411,23 +471,31 @@ fn about(family: &str) -> (&'static str, &'static str) {
     }
 }
 
-fn row_table(s: &mut String, rows: &[&Row], with_family: bool) {
-    let _ = writeln!(
-        s,
-        "| name | n | type | error | M4F instr | M3 instr | host ns | host instr | code B | state B | params B | front | detail |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|"
-    );
+fn row_table(rows: &[&Row], with_family: bool) -> String {
+    let mut table = Table::new([
+        "name",
+        "n",
+        "type",
+        "error",
+        "M4F instr",
+        "M3 instr",
+        "host ns",
+        "host instr",
+        "code B",
+        "state B",
+        "params B",
+        "front",
+        "detail",
+    ]);
     for r in rows {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+        table.row([
             if with_family {
-                cell(&format!("{}: {}", r.key.family, r.key.name))
+                format!("{}: {}", r.key.family, r.key.name)
             } else {
-                cell(&r.key.name)
+                r.key.name.clone()
             },
-            r.key.n,
-            r.key.number,
+            r.key.n.to_string(),
+            r.key.number.clone(),
             pct(r.error),
             num(r.m4f, 1),
             num(r.m3, 1),
@@ -436,10 +504,11 @@ fn row_table(s: &mut String, rows: &[&Row], with_family: bool) {
             bytes(r.code_bytes),
             bytes(r.state_bytes),
             bytes(r.params_bytes),
-            if r.front { "yes" } else { "" },
-            cell(&r.detail)
-        );
+            if r.front { "yes" } else { "" }.into(),
+            r.detail.clone(),
+        ]);
     }
+    table.finish()
 }
 
 /// Maxwell rows pivoted: form/state down, N across.
@@ -477,17 +546,14 @@ fn maxwell_pivot(s: &mut String, rows: &[Row], number: &str) {
         s,
         "\n{label}: entry `error / M4F full step / M4F force-only / host ns full step`\n"
     );
-    let _ = write!(s, "| form/state |");
-    for n in &ns {
-        let _ = write!(s, " N = {n} |");
-    }
-    let _ = writeln!(s, "\n|---|{}", "---|".repeat(ns.len()));
+    let mut table = Table::new(
+        std::iter::once("form/state".to_string()).chain(ns.iter().map(|n| format!("N = {n}"))),
+    );
     for name in names {
-        let _ = write!(s, "| {name} |");
-        for &n in &ns {
+        let entries = ns.iter().map(|&n| {
             let r = full.iter().find(|r| r.key.name == name && r.key.n == n);
             let f = force(name, n);
-            let text = r.map_or_else(
+            r.map_or_else(
                 || "-".into(),
                 |r| {
                     format!(
@@ -499,11 +565,11 @@ fn maxwell_pivot(s: &mut String, rows: &[Row], number: &str) {
                         num(r.host_ns, 1)
                     )
                 },
-            );
-            let _ = write!(s, " {text} |");
-        }
-        let _ = writeln!(s);
+            )
+        });
+        table.row(std::iter::once(name.to_string()).chain(entries));
     }
+    s.push_str(&table.finish());
 }
 
 /// The Markdown report.
@@ -570,42 +636,42 @@ pub(super) fn markdown(
     let _ = writeln!(
         s,
         "## Targets\n\nThe issue's bounds, in guest instructions on the Cortex-M4F: {} of {} \
-         met.\n\n\
-         | target | at most | measured | verdict | how |\n|---|---|---|---|---|",
+         met.\n",
         goals.iter().filter(|g| g.met()).count(),
         goals.len()
     );
+    let mut table = Table::new(["target", "at most", "measured", "verdict", "how"]);
     for g in goals {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {} | {} | {} |",
-            cell(&g.what),
+        table.row([
+            g.what.clone(),
             sig(g.limit),
             g.measured.map_or_else(|| "not measured".into(), sig),
-            if g.met() { "met" } else { "**NOT met**" },
-            cell(&g.note)
-        );
+            if g.met() { "met" } else { "**NOT met**" }.into(),
+            g.note.clone(),
+        ]);
     }
+    s.push_str(&table.finish());
 
     let _ = writeln!(
         s,
         "\n## Cheapest configuration within 1 % error\n\n\
          Per family, the configuration of least M4F instructions per call whose error is at most\n\
-         1 % (host ns where no such configuration has an M4F figure).\n\n\
-         | family | configuration | error | M4F instr | host ns | error measure |\n|---|---|---|---|---|---|"
+         1 % (host ns where no such configuration has an M4F figure).\n"
     );
+    let mut table = Table::new(std::iter::once("family").chain(CHEAPEST_COLUMNS));
     for family in families(rows) {
         let mine: Vec<&Row> = rows.iter().filter(|r| r.key.family == family).collect();
         if mine.iter().all(|r| r.error.is_none()) {
             continue;
         }
-        cheapest_line(&mut s, &family, &mine);
+        cheapest_line(&mut table, &family, &mine);
     }
+    s.push_str(&table.finish());
     let _ = writeln!(
         s,
-        "\nMaxwell banks by order (each bank against its own closed form):\n\n\
-         | order | configuration | error | M4F instr | host ns | error measure |\n|---|---|---|---|---|---|"
+        "\nMaxwell banks by order (each bank against its own closed form):\n"
     );
+    let mut table = Table::new(std::iter::once("order").chain(CHEAPEST_COLUMNS));
     let mut orders: Vec<usize> = rows
         .iter()
         .filter(|r| r.key.family == "maxwell")
@@ -618,8 +684,9 @@ pub(super) fn markdown(
             .iter()
             .filter(|r| r.key.family == "maxwell" && r.key.n == n)
             .collect();
-        cheapest_line(&mut s, &format!("maxwell N = {n}"), &mine);
+        cheapest_line(&mut table, &format!("maxwell N = {n}"), &mine);
     }
+    s.push_str(&table.finish());
 
     let _ = writeln!(
         s,
@@ -657,7 +724,7 @@ pub(super) fn markdown(
             Some("maxwell-force") => {}
             _ => {
                 let _ = writeln!(s);
-                row_table(&mut s, &mine, fams.len() > 1);
+                s.push_str(&row_table(&mine, fams.len() > 1));
             }
         }
     }
@@ -672,24 +739,29 @@ pub(super) fn markdown(
     if footprints.is_empty() {
         let _ = writeln!(s, "No ELF given (`--elf TRIPLE=PATH`).");
     } else {
-        let _ = writeln!(
-            s,
-            "| firmware | target | .text | .rodata | .data | .bss | flash | static RAM |\n|---|---|---|---|---|---|---|---|"
-        );
+        let mut table = Table::new([
+            "firmware",
+            "target",
+            ".text",
+            ".rodata",
+            ".data",
+            ".bss",
+            "flash",
+            "static RAM",
+        ]);
         for f in footprints {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {} | {} | {} | {} |",
-                cell(&f.triple),
-                f.target,
-                f.text,
-                f.rodata,
-                f.data,
-                f.bss,
-                f.flash,
-                f.ram
-            );
+            table.row([
+                f.triple.clone(),
+                f.target.clone(),
+                f.text.to_string(),
+                f.rodata.to_string(),
+                f.data.to_string(),
+                f.bss.to_string(),
+                f.flash.to_string(),
+                f.ram.to_string(),
+            ]);
         }
+        s.push_str(&table.finish());
     }
 
     let _ = writeln!(
@@ -700,11 +772,18 @@ pub(super) fn markdown(
     if grouped.is_empty() {
         let _ = writeln!(s, "None.");
     } else {
-        let _ = writeln!(
-            s,
-            "| family | name | n | type | M4F instr | M3 instr | M4F with the call | state B | params B | lines |\n\
-             |---|---|---|---|---|---|---|---|---|---|"
-        );
+        let mut table = Table::new([
+            "family",
+            "name",
+            "n",
+            "type",
+            "M4F instr",
+            "M3 instr",
+            "M4F with the call",
+            "state B",
+            "params B",
+            "lines",
+        ]);
         for (key, (a, b)) in &grouped {
             let any = a.or(*b);
             // `file:line`, the file without its directories.
@@ -712,21 +791,20 @@ pub(super) fn markdown(
                 .iter()
                 .filter_map(|l| l.map(|l| l.origin.rsplit('/').next().unwrap_or(&l.origin)))
                 .collect();
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                cell(&key.family),
-                cell(&key.name),
-                key.n,
-                cell(&key.number),
+            table.row([
+                key.family.clone(),
+                key.name.clone(),
+                key.n.to_string(),
+                key.number.clone(),
                 a.map_or_else(|| "-".into(), |l| sig(l.instructions())),
                 b.map_or_else(|| "-".into(), |l| sig(l.instructions())),
                 a.map_or_else(|| "-".into(), |l| sig(l.per_call)),
                 bytes(any.and_then(|l| l.state_bytes)),
                 bytes(any.and_then(|l| l.params_bytes)),
-                cell(&origins.join(", "))
-            );
+                origins.join(", "),
+            ]);
         }
+        s.push_str(&table.finish());
     }
 
     let _ = writeln!(s, "\n## Tracker against peer crates\n");
@@ -745,25 +823,33 @@ pub(super) fn markdown(
              {SAME_AMPLITUDE_RATIO} times. `ours-*` run the default tuning, which fades a mode whose \
              amplitude sinks below 3 noise deviations (frequency and damping frozen): this record \
              decays below that after about 2.8 s, hence their amplitude error; `ours-*-nofade` run \
-             the same plain filter as the peers.\n\n\
-             | source | name | crate | filter | cost | unit | f0 error % | damping error pts | amplitude RMS |\n\
-             |---|---|---|---|---|---|---|---|---|"
+             the same plain filter as the peers.\n"
         );
+        let mut table = Table::new([
+            "source",
+            "name",
+            "crate",
+            "filter",
+            "cost",
+            "unit",
+            "f0 error %",
+            "damping error pts",
+            "amplitude RMS",
+        ]);
         for p in peers {
-            let _ = writeln!(
-                s,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                cell(&p.source),
-                cell(&p.name),
-                cell(&p.krate),
-                cell(&p.filter),
+            table.row([
+                p.source.clone(),
+                p.name.clone(),
+                p.krate.clone(),
+                p.filter.clone(),
                 sig(p.cost),
-                cell(&p.unit),
+                p.unit.clone(),
                 num(p.freq_err_pct, 6),
                 num(p.damp_err_pts, 6),
-                num(p.amp_rms, 6)
-            );
+                num(p.amp_rms, 6),
+            ]);
         }
+        s.push_str(&table.finish());
         let _ = writeln!(
             s,
             "\nOur cheapest as-accurate tracker over the cheapest peer, per file (the rule \
@@ -847,7 +933,7 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
     for (key, (a, b)) in grouped {
         let code = a.and_then(|l| {
             let f = l.function?;
-            elfs.get(&l.target)?.function_size(f).map(u64::from)
+            elfs.get(&l.target)?.function_size(f)
         });
         let any = a.or(b);
         let fields = [
@@ -915,6 +1001,17 @@ mod tests {
             amp_rms: Some(errors[2]),
             source: "m4f".into(),
         }
+    }
+
+    #[test]
+    fn tables_are_unpadded_markdown_with_pipes_escaped() {
+        let mut t = Table::new(["a", "long title"]);
+        t.row(["x|y", ""]);
+        t.row([String::from("1"), String::from("2")]);
+        assert_eq!(
+            t.finish(),
+            "| a | long title |\n|---|---|\n| x\\|y |  |\n| 1 | 2 |\n"
+        );
     }
 
     #[test]
