@@ -25,15 +25,23 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::fs;
 use std::path::{Path, PathBuf};
 
-/// The workspace crates, relative to the workspace root.
-const CRATES: &[&str] = &[
-    "core-nostd",
-    "kernels",
-    "host-sim",
-    "board-examples",
-    "tests",
-    "fuzz",
-];
+/// The crates scanned, relative to the workspace root: the workspace's
+/// `members` and the fuzz crate, which is a workspace of its own.
+fn crates(workspace: &Path) -> Vec<String> {
+    let manifest = fs::read_to_string(workspace.join("Cargo.toml")).unwrap();
+    let start = manifest.find("members = [").expect("workspace members");
+    let list = &manifest[start..];
+    let list = &list[..list.find(']').expect("end of the members list")];
+    let mut crates: Vec<String> = list
+        .split('"')
+        .skip(1)
+        .step_by(2)
+        .map(str::to_string)
+        .collect();
+    assert!(crates.len() >= 4, "members read from Cargo.toml: {crates:?}");
+    crates.push("fuzz".into());
+    crates
+}
 /// Directories (relative to a crate) whose `.rs` files are crate roots.
 const ROOT_DIRS: &[&str] = &["src/bin", "tests", "benches", "examples", "fuzz_targets"];
 
@@ -469,8 +477,8 @@ fn rust_files(dir: &Path) -> Vec<PathBuf> {
 fn no_two_modules_import_each_other() {
     let workspace = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let (mut failures, mut targets) = (String::new(), 0);
-    for krate in CRATES {
-        let dir = workspace.join(krate);
+    for krate in crates(&workspace) {
+        let dir = workspace.join(&krate);
         let mut roots = vec![dir.join("src/lib.rs"), dir.join("src/main.rs")];
         for sub in ROOT_DIRS {
             let entries = fs::read_dir(dir.join(sub)).into_iter().flatten().flatten();
