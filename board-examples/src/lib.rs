@@ -11,6 +11,3 @@ pub mod memory;
 #[cfg(target_os = "none")]
 pub mod probe;
 pub mod rig;
-
-// The rig's backbone is the kernels' 8-point spline.
-use bushing_kernels::spline;

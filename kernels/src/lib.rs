@@ -21,6 +21,10 @@
 #![no_std]
 #![forbid(unsafe_code)]
 
+mod noise;
+
+pub use noise::Noise;
+
 use core::f64::consts::PI;
 
 use bushing::six_dof::{Connectivity, Pose, Quat, SixDof};

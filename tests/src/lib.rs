@@ -29,19 +29,18 @@ mod golden;
 mod inputs;
 mod iwan;
 mod maxwell;
-mod noise;
 mod oscillator;
 mod stack;
 mod tracker;
 mod xf;
 
+pub use bushing_kernels::Noise;
 pub use check::{CaseResult, Failure, at_most, holds};
 pub use golden::{
     GOLDEN_FRICTION_HASH, GOLDEN_HASH, GOLDEN_HYSTERESIS_HASH, GOLDEN_STEPS, TraceHash,
     golden_trace, golden_trace_friction, golden_trace_hysteresis,
 };
 pub use iwan::{ReferenceIwan, reference_iwan};
-pub use noise::Noise;
 
 use backbone::{polynomial_f32_matches_f64, spline_f32_monotone_positive_tangent};
 use fractional::grunwald_modulus_f32;

@@ -8,7 +8,7 @@ use bushing::tracker::{
 use bushing::{Bushing, MaxwellBank, MaxwellForm, MaxwellSpec, Polynomial};
 
 use crate::check::{CaseResult, Failure, at_most, holds, param};
-use crate::noise::Noise;
+use bushing_kernels::Noise;
 
 pub(crate) fn modal_tracker_free_decay_f32(filter: Filter) -> CaseResult {
     // A 100 Hz mode with 1 % damping seen by an accelerometer at 50 samples

@@ -38,7 +38,10 @@ fn crates(workspace: &Path) -> Vec<String> {
         .step_by(2)
         .map(str::to_string)
         .collect();
-    assert!(crates.len() >= 4, "members read from Cargo.toml: {crates:?}");
+    assert!(
+        crates.len() >= 4,
+        "members read from Cargo.toml: {crates:?}"
+    );
     crates.push("fuzz".into());
     crates
 }

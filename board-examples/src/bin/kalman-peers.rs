@@ -68,6 +68,7 @@ use bushing::ParamError;
 use bushing::tracker::{
     Filter, Measured, ModalState, ModalTracker, ModeInit, SensorSpec, Tuning, UtParams,
 };
+use bushing_kernels::Noise;
 #[cfg(target_os = "none")]
 use cortex_m_semihosting::hprintln as say;
 #[cfg(not(target_os = "none"))]
@@ -92,29 +93,6 @@ type Matrix = [[f32; 4]; 4];
 // ---------------------------------------------------------------------------
 // Data
 
-/// xorshift64* (Vigna): the same sequence on every target.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
-    /// Uniform in (0, 1].
-    fn uniform(&mut self) -> f64 {
-        ((self.next() >> 11) as f64 + 1.0) / (1u64 << 53) as f64
-    }
-
-    /// Standard normal (Box-Muller, cosine branch).
-    fn gaussian(&mut self) -> f64 {
-        let (u1, u2) = (self.uniform(), self.uniform());
-        libm::sqrt(-2.0 * libm::log(u1)) * libm::cos(TAU * u2)
-    }
-}
-
 /// The record: clean acceleration and what the accelerometer reads.
 struct Record {
     clean: [f32; SAMPLES],
@@ -126,7 +104,7 @@ struct Record {
 fn record() -> Record {
     let w0 = TAU * F0;
     let (sigma, omega) = (-XI * w0, w0 * libm::sqrt(1.0 - XI * XI));
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut rng = Noise::new(0x9E37_79B9_7F4A_7C15);
     let mut r = Record {
         clean: [0.0; SAMPLES],
         noisy: [0.0; SAMPLES],
@@ -135,7 +113,7 @@ fn record() -> Record {
         let t = (k + 1) as f64 * DT;
         let a = libm::exp(sigma * t) * libm::cos(omega * t);
         *c = a as f32;
-        *y = (a + NOISE * rng.gaussian()) as f32;
+        *y = (a + NOISE * rng.gauss()) as f32;
     }
     r
 }

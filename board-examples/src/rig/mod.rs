@@ -79,7 +79,7 @@ pub fn rig_bushing<T: Real>(dt: f64) -> Result<RigBushing<T>, ParamError> {
         IwanCellSpec::new(0.08, 6.0),
     ];
     Bushing::new(
-        crate::spline()?,
+        bushing_kernels::spline()?,
         (
             MaxwellBank::<T, 4, Plain<T>>::new(MaxwellForm::RateExactRamp, &cells, dt)?,
             IwanBank::new(&jenkins)?,

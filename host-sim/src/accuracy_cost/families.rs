@@ -14,7 +14,7 @@ use bushing::{
     Accumulator, Bushing, Compensated, Drive, Effect, MaxwellBank, MaxwellForm, MaxwellSpec,
     Multiplied, ParamError, Plain, Polynomial, Real, XfBank, XfForm, XfSpec,
 };
-use bushing_kernels::DT;
+use bushing_kernels::{DT, Noise};
 
 use super::{Cost, Error, Key, Options, Row, refused};
 use crate::fractional_report::{self, RetunePath};
@@ -413,46 +413,6 @@ fn xf_rows<T: Real>(options: &Options, rows: &mut Vec<Row>) {
     }
 }
 
-/// A small deterministic Gaussian source for the tracker's noise: a
-/// 64-bit LCG feeding Marsaglia's polar method.
-struct Gauss {
-    state: u64,
-    spare: Option<f64>,
-}
-
-impl Gauss {
-    fn new(seed: u64) -> Self {
-        Self {
-            state: seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0xA076_1D64_78BD_642F,
-            spare: None,
-        }
-    }
-
-    fn unit(&mut self) -> f64 {
-        self.state = self
-            .state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        // Top 53 bits to [-1, 1).
-        (self.state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-
-    fn next(&mut self) -> f64 {
-        if let Some(v) = self.spare.take() {
-            return v;
-        }
-        loop {
-            let (u, v) = (self.unit(), self.unit());
-            let s = u * u + v * v;
-            if s > 0.0 && s < 1.0 {
-                let m = (-2.0 * s.ln() / s).sqrt();
-                self.spare = Some(v * m);
-                return u * m;
-            }
-        }
-    }
-}
-
 /// RMS errors (relative on f0, absolute on the damping ratio) of the
 /// tracker on the free decay of [`TRACKER_CASE`], acceleration sensor,
 /// 40 dB SNR, start values off by 0.5 % in frequency, 0.2 points in
@@ -488,10 +448,10 @@ pub fn tracker_errors<T: Real>(filter: Filter, seeds: u64) -> Result<(f64, f64),
             &Tuning::default(),
             filter,
         )?;
-        let mut rng = Gauss::new(seed + 1);
+        let mut rng = Noise::new(seed + 1);
         let mut state = tracker.start();
         for k in 1..=samples {
-            let z = analytic(k as f64 * dt).0 + noise * rng.next();
+            let z = analytic(k as f64 * dt).0 + noise * rng.gauss();
             tracker.step(&mut state, &[T::from_f64(z)]);
         }
         let m = tracker.mode(&state, 0);
@@ -610,8 +570,8 @@ mod tests {
 
     #[test]
     fn gauss_is_centred_and_unit() {
-        let mut g = Gauss::new(3);
-        let v: Vec<f64> = (0..20_000).map(|_| g.next()).collect();
+        let mut g = Noise::new(3);
+        let v: Vec<f64> = (0..20_000).map(|_| g.gauss()).collect();
         let mean = v.iter().sum::<f64>() / v.len() as f64;
         let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64;
         assert!(

@@ -8,7 +8,7 @@ use bushing::{Bushing, Effect, EffectOutput, IwanBank, IwanCellSpec, IwanSliders
 
 use super::{Measure, effect_force, worst};
 use crate::check::{Failure, param};
-use crate::noise::Noise;
+use bushing_kernels::Noise;
 
 type Iwan16 = Bushing<f32, Polynomial<f32, 2>, (IwanBank<f32, 16>,)>;
 

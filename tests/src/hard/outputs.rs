@@ -13,8 +13,8 @@ use bushing::{
 use super::maxwell::four_cells;
 use super::{Measure, miss, refused_as, worst};
 use crate::check::param;
-use crate::noise::Noise;
 use crate::stack::sts_bushing;
+use bushing_kernels::Noise;
 
 /// A K_f table in f32 whose values, force gained, slope or dissipated work
 /// leave the working type is refused, naming the point; one that fits is

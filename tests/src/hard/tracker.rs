@@ -7,7 +7,7 @@ use bushing::tracker::{Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tun
 
 use super::{Measure, miss, worst};
 use crate::check::{Failure, param};
-use crate::noise::Noise;
+use bushing_kernels::Noise;
 
 /// An EKF on one sensor of `measured` at `dt`, started at `f0` Hz and
 /// damping `zeta` with `amplitude`.

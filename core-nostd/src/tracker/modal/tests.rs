@@ -1,3 +1,5 @@
+use bushing_kernels::Noise;
+
 use super::rotation::{anchor_at, rotation, rotation_near, rotation_pair};
 use super::*;
 use crate::error::{Param, ParamError};
@@ -305,19 +307,6 @@ fn non_finite_samples_are_refused_and_the_state_kept() {
 // against all 2n + 1 sigma points of the same square root of P, the
 // update against the Joseph form written out.
 
-/// Pseudo-random numbers in [-1, 1).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-}
-
 fn tracker<const N: usize>(modes: usize, sensors: usize, filter: Filter) -> ModalTracker<f64, N> {
     let kinds = [
         Measured::Acceleration,
@@ -367,17 +356,17 @@ fn tracker<const N: usize>(modes: usize, sensors: usize, filter: Filter) -> Moda
 /// (entries of the order of the start variances, θ and λ correlated
 /// with the amplitudes).
 #[allow(clippy::needless_range_loop)]
-fn random_core<const N: usize>(tr: &ModalTracker<f64, N>, rng: &mut Lcg) -> Core<f64, N> {
+fn random_core<const N: usize>(tr: &ModalTracker<f64, N>, rng: &mut Noise) -> Core<f64, N> {
     let mut x = tr.x0;
     let mut scale = [0.0; N];
     for (i, (xi, si)) in x.iter_mut().zip(scale.iter_mut()).enumerate() {
         *si = tr.p0[i].sqrt();
-        *xi += 0.3 * *si * rng.next();
+        *xi += 0.3 * *si * rng.symmetric();
     }
     let mut a = [[0.0; N]; N];
     for row in a.iter_mut() {
         for v in row.iter_mut() {
-            *v = rng.next();
+            *v = rng.symmetric();
         }
     }
     let mut p = [[0.0; N]; N];
@@ -462,7 +451,7 @@ fn close<const N: usize>(a: &[[f64; N]; N], b: &[[f64; N]; N], what: &str) {
 // Dense references read best with indices.
 #[allow(clippy::needless_range_loop)]
 fn check_filters<const N: usize>(modes: usize, sensors: usize) {
-    let mut rng = Lcg(N as u64 * 7919 + modes as u64);
+    let mut rng = Noise::new(N as u64 * 7919 + modes as u64);
     for round in 0..4 {
         // EKF prediction.
         let tr = tracker::<N>(modes, sensors, Filter::Ekf);
@@ -512,7 +501,7 @@ fn check_filters<const N: usize>(modes: usize, sensors: usize) {
         // Joseph update, with a frozen mode in the last round.
         let (mut v, s, y) = ([0.0; N], 0.7, 0.3);
         for vi in v.iter_mut() {
-            *vi = 0.1 * rng.next();
+            *vi = 0.1 * rng.symmetric();
         }
         let mut k = v.map(|vi| vi / s);
         if core.faded[0] {
@@ -651,12 +640,15 @@ fn structured_filters_match_dense_references() {
 #[test]
 fn sigma_point_and_anchor_rotations_are_accurate_in_f32() {
     // Against the f64 polynomials (themselves within 6e-8 of sin, cos).
-    let mut rng = Lcg(3);
+    let mut rng = Noise::new(3);
     let mut worst = (0.0f64, 0.0f64);
     for _ in 0..20_000 {
-        let theta = 0.05 + 2.8 * (rng.next() + 1.0) / 2.0;
-        let lambda = 0.05 * rng.next();
-        let (dt, dl) = (theta.min(1.0 / 32.0) * rng.next() * 0.5, rng.next() / 64.0);
+        let theta = 0.05 + 2.8 * (rng.symmetric() + 1.0) / 2.0;
+        let lambda = 0.05 * rng.symmetric();
+        let (dt, dl) = (
+            theta.min(1.0 / 32.0) * rng.symmetric() * 0.5,
+            rng.symmetric() / 64.0,
+        );
         let exact = |t: f64, l: f64| rotation(t, l);
         let c = rotation(theta as f32, lambda as f32);
         let [p, m] = rotation_pair(theta as f32, lambda as f32, dt as f32, dl as f32, c);

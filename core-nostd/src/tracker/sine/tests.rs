@@ -1,22 +1,7 @@
+use bushing_kernels::Noise;
+
 use super::*;
 use core::f64::consts::TAU;
-
-/// Deterministic standard normal samples (xorshift64* and Box-Muller).
-struct Gauss(u64);
-
-impl Gauss {
-    fn uniform(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let v = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d);
-        ((v >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn next(&mut self) -> f64 {
-        let (u, v) = (self.uniform(), self.uniform());
-        libm::sqrt(-2.0 * libm::log(u)) * libm::cos(TAU * v)
-    }
-}
 
 fn spec(frequency: f64, bandwidth: f64) -> SineSpec {
     SineSpec {
@@ -208,13 +193,13 @@ fn steady_noise_on_the_estimate_is_sigma_root_k() {
     let tr = SineTracker::<f64>::new(dt, &spec(f, 0.05 * f), ch).unwrap();
     let k = 1.0 - tr.envelope_pole();
     let mut s = tr.start();
-    let mut g = Gauss(0x2545_f491_4f6c_dd1d);
+    let mut g = Noise::from_state(0x2545_f491_4f6c_dd1d);
     let first = (20.0 / k) as usize;
     let (mut sa, mut sb, mut count) = (0.0, 0.0, 0.0);
     for n in 0..first + 2_000_000 {
         let ph = TAU * f * dt * n as f64;
         let (c, sn) = (libm::cos(ph), libm::sin(ph));
-        tr.step(&mut s, c + sigma * g.next()).unwrap();
+        tr.step(&mut s, c + sigma * g.gauss()).unwrap();
         if n >= first {
             let (a, b) = s.pair();
             sa += (a - c) * (a - c);
@@ -335,9 +320,9 @@ fn covariance_run(samples: usize, ratio: f64, snr: f64, steps: usize) {
     let t32 = SineTracker::<f32>::new(dt, &spec(f, ratio * f), ch).unwrap();
     let t64 = SineTracker::<f64>::new(dt, &spec(f, ratio * f), ch).unwrap();
     let (mut s32, mut s64) = (t32.start(), t64.start());
-    let mut g = Gauss(0x9e37_79b9_7f4a_7c15);
+    let mut g = Noise::from_state(0x9e37_79b9_7f4a_7c15);
     for n in 0..steps {
-        let z = libm::sin(TAU * f * dt * n as f64 + 0.4) + g.next() / snr;
+        let z = libm::sin(TAU * f * dt * n as f64 + 0.4) + g.gauss() / snr;
         t32.step(&mut s32, z as f32).unwrap();
         t64.step(&mut s64, z).unwrap();
         let p = t32.covariance(&s32);
@@ -508,10 +493,10 @@ fn ordinary_tracking_is_unchanged_by_the_guard() {
     let dt = 1e-3;
     let tr = SineTracker::<f32>::new(dt, &spec(10.0, 0.5), CH).unwrap();
     let mut s = tr.start();
-    let mut g = Gauss(0x1234_5678_9abc_def1);
+    let mut g = Noise::from_state(0x1234_5678_9abc_def1);
     let mut h: u64 = 0;
     for n in 0..5000 {
-        let z = 2.0 * libm::sin(TAU * 10.3 * dt * n as f64 + 0.3) + 0.05 * g.next();
+        let z = 2.0 * libm::sin(TAU * 10.3 * dt * n as f64 + 0.3) + 0.05 * g.gauss();
         let y = tr.step(&mut s, z as f32).unwrap();
         for v in [s.a(), s.b(), y] {
             h = (h ^ v.bits()).wrapping_mul(0x0100_0000_01b3);
@@ -541,8 +526,8 @@ fn ordinary_tracking_is_unchanged_by_the_guard() {
     let mut h: u64 = 0;
     for n in 0..5000 {
         let ph = TAU * 10.0 * dt * n as f64;
-        let x = libm::cos(ph) + 1e-3 * g.next();
-        let f = 3.0 * libm::cos(ph) - 0.7 * libm::sin(ph) + 1e-2 * g.next();
+        let x = libm::cos(ph) + 1e-3 * g.gauss();
+        let f = 3.0 * libm::cos(ph) - 0.7 * libm::sin(ph) + 1e-2 * g.gauss();
         let (yx, yf) = m.step(&mut ms, x as f32, f as f32).unwrap();
         let ((ax, bx), (af, bf)) = (ms.displacement(), ms.force());
         for v in [ax, bx, af, bf, yx, yf] {
@@ -639,7 +624,7 @@ fn hostile<T: Real, const C: usize>(
         f64::NAN,
         f64::INFINITY,
     ];
-    let mut u = Gauss(seed);
+    let mut u = Noise::from_state(seed);
     let mut pick = || {
         let v = levels[(u.uniform() * levels.len() as f64) as usize];
         let v = if v.is_finite() && v != big && v > 1e-10 && v < 1e10 {
