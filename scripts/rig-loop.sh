@@ -39,6 +39,9 @@ summary "$out/m3.log"
 
 step "the same scene in bushing-sim, f32 and f64"
 cargo build -q --release -p bushing-sim
+# This script's own folders: an output of an older bushing-sim, from before
+# outputs were marked, would be refused rather than replaced.
+rm -rf "$out/host-f32" "$out/host-f64"
 "$sim" run scenes/rig-loop.toml --out "$out/host-f32" >"$out/host-f32.log"
 "$sim" run scenes/rig-loop.toml --out "$out/host-f64" --number f64 >"$out/host-f64.log"
 

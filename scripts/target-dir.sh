@@ -8,3 +8,7 @@ if [ -z "$target" ]; then
     echo "error: cargo metadata gave no target_directory" >&2
     exit 1
 fi
+# Inside the repository, relative: reports name their inputs by it.
+case "$target" in
+    "$PWD"/*) target=${target#"$PWD"/} ;;
+esac

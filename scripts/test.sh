@@ -105,10 +105,13 @@ cargo check --quiet --manifest-path fuzz/Cargo.toml --target-dir "$target/fuzz-c
 
 step "every scene, with the README's command form (run SCENE --out DIR)"
 cargo build -q -p bushing-sim --release
+# This step's own folders (an output of an older bushing-sim, from before
+# outputs were marked, would be refused rather than replaced).
+rm -rf "$target/scenes" "$target/powertrain"
 find scenes -name '*.toml' | sort | while read -r scene; do
     name=${scene#scenes/}
     out="$target/scenes/${name%.toml}"
-    mkdir -p "$out"
+    mkdir -p "$(dirname "$out")"
     "$target/release/bushing-sim" run "$scene" --out "$out" >"$out.log" 2>&1 \
         || { cat "$out.log"; echo "error: $scene failed" >&2; exit 1; }
     printf '%-48s %s\n' "$scene" "$(grep -E '^steps' "$out.log" | tr -s ' ')"
