@@ -314,8 +314,8 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
         Command::IwanTable(a) => table(iwan_report::table, a.out.as_deref()),
         Command::FractionalTable(a) => table(fractional_report::table, a.out.as_deref()),
         Command::Powertrain { out } => {
-            let staged = Staged::begin(&out)?;
-            let text = powertrain::report(staged.staging_dir()).map_err(CliError::Failed)?;
+            let mut staged = Staged::begin(&out)?;
+            let text = powertrain::report(&mut staged).map_err(CliError::Failed)?;
             staged.commit()?;
             print!("{text}");
             Ok(())

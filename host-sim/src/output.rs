@@ -123,13 +123,6 @@ impl Staged {
         Ok(self.final_path(name))
     }
 
-    /// The staging folder itself, for writers that create their files by
-    /// path (the PNG encoder, the powertrain report). Whatever they put
-    /// there is committed with the rest.
-    pub fn staging_dir(&self) -> &Path {
-        self.dir.path()
-    }
-
     /// Writes the marker and puts the folder in place of the output; the
     /// earlier output, if any, is deleted.
     pub fn commit(mut self) -> Result<PathBuf, OutputError> {

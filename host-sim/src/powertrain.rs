@@ -533,9 +533,10 @@ impl Transient {
 }
 
 /// Runs both models over the stop/start transient, writes
-/// `powertrain.csv`, `powertrain-power.svg` and `powertrain-modal.svg` in
-/// `dir` and returns the summary (`bushing-sim powertrain --out DIR`).
-pub fn report(dir: &std::path::Path) -> Result<String, String> {
+/// `powertrain.csv`, `powertrain-power.svg` and `powertrain-modal.svg` into
+/// `out` (committed by the caller) and returns the summary
+/// (`bushing-sim powertrain --out DIR`).
+pub fn report(out: &mut crate::output::Staged) -> Result<String, String> {
     use std::fmt::Write as _;
 
     use crate::plot::{Plot, Series, render_panels};
@@ -549,7 +550,6 @@ pub fn report(dir: &std::path::Path) -> Result<String, String> {
         .map(|m| s.transient(m, DURATION, DT, 10))
         .collect::<Result<_, _>>()
         .map_err(|e| e.to_string())?;
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
 
     let mut csv = String::from("time_s");
     for r in &runs {
@@ -580,9 +580,10 @@ pub fn report(dir: &std::path::Path) -> Result<String, String> {
             csv.push('\n');
         }
     }
-    let write = |name: &str, text: &str| {
-        let path = dir.join(name);
-        std::fs::write(&path, text).map_err(|e| format!("{}: {e}", path.display()))
+    let mut write = |name: &str, text: &str| {
+        out.write(name, text.as_bytes())
+            .map(drop)
+            .map_err(|e| e.to_string())
     };
     write("powertrain.csv", &csv)?;
 
@@ -714,7 +715,7 @@ pub fn report(dir: &std::path::Path) -> Result<String, String> {
     let _ = writeln!(
         t,
         "  files: powertrain.csv, powertrain-power.svg, powertrain-modal.svg in {}",
-        dir.display()
+        out.final_path("").display()
     );
     Ok(t)
 }
