@@ -32,6 +32,7 @@ use bushing::{BoucWen, KfTable, MaxwellBank, MaxwellForm, MaxwellSpec, Real, Rel
 
 use crate::model;
 use crate::profile::{Sine, Triangle};
+use crate::run::{self, RunError, Sink, Step};
 use crate::scene::{
     BackboneSpec, Effect, Friction, Law, NumberType, ProfileSpec, Scene, TABLE_POINTS,
 };
@@ -268,6 +269,45 @@ impl Window {
     }
 }
 
+/// The steady-cycle window as a sink of the stepping pipeline: steps after
+/// `start` feed the first harmonics, steps after `last` (the last cycle)
+/// the energies and force extremes.
+struct WindowSink<'w> {
+    window: &'w mut Window,
+    forces: Vec<f64>,
+    start: u64,
+    last: u64,
+}
+
+impl<T: Real> Sink<T> for WindowSink<'_> {
+    fn step(&mut self, s: &Step<'_, T>) -> Result<(), RunError> {
+        if s.index <= self.start {
+            return Ok(());
+        }
+        let w = &mut *self.window;
+        let elastic = s.row.elastic.to_f64();
+        for (j, f) in self.forces.iter_mut().enumerate() {
+            let e = s.parts.get(j);
+            *f = e.map_or(f64::NAN, |e| e.force.to_f64());
+            if s.index > self.last {
+                let d = e.map_or(f64::NAN, |e| e.dissipated.to_f64());
+                if let (Some(en), Some(lo), Some(hi)) =
+                    (w.energy.get_mut(j), w.low.get_mut(j), w.high.get_mut(j))
+                {
+                    *en += d;
+                    *lo = lo.min(*f);
+                    *hi = hi.max(*f);
+                }
+            }
+        }
+        w.harmonic.push(
+            s.time,
+            std::iter::once(s.demand).chain(self.forces.iter().map(|f| elastic + f)),
+        );
+        Ok(())
+    }
+}
+
 fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
     let mut bushing = model::compile::<T>(scene).map_err(|e| e.to_string())?;
     let names = model::effect_names(scene);
@@ -315,39 +355,13 @@ fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
         low: vec![f64::INFINITY; n],
         high: vec![f64::NEG_INFINITY; n],
     };
-    let mut forces = vec![f64::NAN; n];
-    let (mut rows, mut outputs) = (Vec::with_capacity(1), Vec::with_capacity(n));
-    for i in 1..=end {
-        let t = i as f64 * scene.dt;
-        let x = scene.input(t);
-        rows.clear();
-        outputs.clear();
-        bushing.step_into(&[T::from_f64(x)], &mut rows, &mut outputs);
-        if i <= start {
-            continue;
-        }
-        let Some(o) = rows.first() else { continue };
-        let elastic = o.elastic.to_f64();
-        let parts: &[_] = if o.refused { &[] } else { &outputs };
-        for (j, f) in forces.iter_mut().enumerate() {
-            let e = parts.get(j);
-            *f = e.map_or(f64::NAN, |e| e.force.to_f64());
-            if i > last {
-                let d = e.map_or(f64::NAN, |e| e.dissipated.to_f64());
-                if let (Some(en), Some(lo), Some(hi)) =
-                    (w.energy.get_mut(j), w.low.get_mut(j), w.high.get_mut(j))
-                {
-                    *en += d;
-                    *lo = lo.min(*f);
-                    *hi = hi.max(*f);
-                }
-            }
-        }
-        w.harmonic.push(
-            t,
-            std::iter::once(x).chain(forces.iter().map(|f| elastic + f)),
-        );
-    }
+    let mut sink = WindowSink {
+        window: &mut w,
+        forces: vec![f64::NAN; n],
+        start,
+        last,
+    };
+    run::drive_steps(scene, bushing.as_mut(), end, &mut [&mut sink]).map_err(|e| e.to_string())?;
     let t0 = start as f64 * scene.dt;
     let kind = match p.kind {
         Kind::Sine(f) => format!("sine of {:e} mm at {f:e} Hz", p.amplitude),

@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 use bushing::Real;
 use serde::Serialize;
 
-pub use pipeline::{CHUNK, Sink, Step, drive};
+pub use pipeline::{CHUNK, Sink, Step, drive, drive_steps};
 pub use plots::{PLOT_POINTS, PlotSink, TIME_BUCKETS};
 pub use progress::Progress;
 pub use trace::{TraceSink, column_name, row_bytes};

@@ -1,7 +1,8 @@
-//! The one stepping loop of a run: the profile is read through the scene's
-//! ADC, the model steps a chunk at a time (timed, with no I/O inside), and
-//! every step is then handed to each [`Sink`] in turn: the trace, the
-//! plots, the modulus probe, the progress bar.
+//! The one stepping loop of the scenes: the profile is read through the
+//! scene's ADC, the model steps a chunk at a time (timed, with no I/O
+//! inside), and every step is then handed to each [`Sink`] in turn: for
+//! `run` the trace, the plots, the modulus probe and the progress bar; for
+//! `validate` its steady-cycle window.
 
 use std::time::Instant;
 
@@ -20,6 +21,9 @@ pub struct Step<'a, T: Real> {
     pub index: u64,
     /// Time at the end of the step, s.
     pub time: f64,
+    /// The profile's value at `time`, read through the scene's ADC, in
+    /// f64 (before the conversion to the working type).
+    pub demand: f64,
     /// The input the model read (displacement, or force for an
     /// oscillator scene).
     pub input: T,
@@ -44,8 +48,18 @@ pub fn drive<T: Real>(
     model: &mut dyn SceneModel<T>,
     sinks: &mut [&mut dyn Sink<T>],
 ) -> Result<f64, super::RunError> {
-    let steps = scene.steps();
+    drive_steps(scene, model, scene.steps(), sinks)
+}
+
+/// [`drive`] over the first `steps` steps only.
+pub fn drive_steps<T: Real>(
+    scene: &Scene,
+    model: &mut dyn SceneModel<T>,
+    steps: u64,
+    sinks: &mut [&mut dyn Sink<T>],
+) -> Result<f64, super::RunError> {
     let count = model.effect_count();
+    let mut demands = Vec::with_capacity(CHUNK);
     let mut inputs = Vec::with_capacity(CHUNK);
     let mut rows: Vec<StepRow<T>> = Vec::with_capacity(CHUNK);
     let mut parts = Vec::with_capacity(CHUNK * count);
@@ -54,20 +68,24 @@ pub fn drive<T: Real>(
     while n < steps {
         let len = (steps - n).min(CHUNK as u64) as usize;
         inputs.clear();
+        demands.clear();
         for k in 0..len as u64 {
             let t = (n + 1 + k) as f64 * scene.dt;
-            inputs.push(T::from_f64(scene.input(t)));
+            let demand = scene.input(t);
+            demands.push(demand);
+            inputs.push(T::from_f64(demand));
         }
         rows.clear();
         parts.clear();
         let start = Instant::now();
         model.step_into(&inputs, &mut rows, &mut parts);
         busy += start.elapsed().as_secs_f64();
-        for (k, (input, row)) in inputs.iter().zip(&rows).enumerate() {
+        for (k, ((input, demand), row)) in inputs.iter().zip(&demands).zip(&rows).enumerate() {
             let index = n + 1 + k as u64;
             let step = Step {
                 index,
                 time: index as f64 * scene.dt,
+                demand: *demand,
                 input: *input,
                 row,
                 parts: if row.refused {
