@@ -16,6 +16,7 @@ pub mod backbone;
 pub mod cli;
 pub mod compare;
 pub mod cost;
+pub mod csv_text;
 pub mod fit;
 pub mod fractional_report;
 pub mod iwan_report;

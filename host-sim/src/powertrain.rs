@@ -551,35 +551,30 @@ pub fn report(out: &mut crate::output::Staged) -> Result<String, String> {
         .collect::<Result<_, _>>()
         .map_err(|e| e.to_string())?;
 
-    let mut csv = String::from("time_s");
+    let mut header = vec!["time_s".to_string()];
     for r in &runs {
         for (name, ..) in TABLE_5_1 {
-            let _ = write!(
-                csv,
-                ",{}_{}_power_W",
-                r.model.name(),
-                name.replace(' ', "_")
-            );
+            let name = name.replace(' ', "_");
+            header.push(format!("{}_{name}_power_W", r.model.name()));
         }
         for j in 1..=6 {
-            let _ = write!(csv, ",{}_mode{j}_energy_mJ", r.model.name());
+            header.push(format!("{}_mode{j}_energy_mJ", r.model.name()));
         }
-        let _ = write!(csv, ",{}_dissipated_so_far_mJ", r.model.name());
+        header.push(format!("{}_dissipated_so_far_mJ", r.model.name()));
     }
-    csv.push('\n');
+    let mut table = crate::csv_text::CsvText::new(&header);
     if let [a, b] = runs.as_slice() {
         let rows = a.samples.iter().zip(&a.dissipated);
         for ((x, dx), (y, dy)) in rows.zip(b.samples.iter().zip(&b.dissipated)) {
-            let _ = write!(csv, "{:.6}", x.0);
+            let mut record = vec![format!("{:.6}", x.0)];
             for ((_, p, e), d) in [(x, dx), (y, dy)] {
-                for v in p.iter().chain(e) {
-                    let _ = write!(csv, ",{v:e}");
-                }
-                let _ = write!(csv, ",{:e}", d.iter().sum::<f64>());
+                record.extend(p.iter().chain(e).map(|v| format!("{v:e}")));
+                record.push(format!("{:e}", d.iter().sum::<f64>()));
             }
-            csv.push('\n');
+            table.record(&record);
         }
     }
+    let csv = table.finish();
     let mut write = |name: &str, text: &str| {
         out.write(name, text.as_bytes())
             .map(drop)

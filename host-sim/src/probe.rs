@@ -291,19 +291,26 @@ impl ModulusProbe {
 
 /// `modulus.csv`: one row per point.
 pub fn modulus_csv(points: &[ModulusPoint]) -> String {
-    let mut s =
-        String::from("frequency_hz,amplitude_mm,storage_N_per_mm,loss_N_per_mm,loss_factor\n");
+    let mut text = crate::csv_text::CsvText::new([
+        "frequency_hz",
+        "amplitude_mm",
+        "storage_N_per_mm",
+        "loss_N_per_mm",
+        "loss_factor",
+    ]);
     for p in points {
-        s.push_str(&format!(
-            "{:e},{:e},{:e},{:e},{:e}\n",
-            p.frequency_hz,
-            p.amplitude_mm,
-            p.storage,
-            p.loss,
-            p.loss_factor()
-        ));
+        text.record(
+            [
+                p.frequency_hz,
+                p.amplitude_mm,
+                p.storage,
+                p.loss,
+                p.loss_factor(),
+            ]
+            .map(|v| format!("{v:e}")),
+        );
     }
-    s
+    text.finish()
 }
 
 /// The modulus plot: storage K′ and loss K″ against the imposed amplitude,

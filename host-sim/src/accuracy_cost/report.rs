@@ -888,14 +888,6 @@ fn group_other(other: &[KernelLine]) -> Grouped<'_> {
     grouped
 }
 
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
 fn csv_num(v: Option<f64>) -> String {
     v.map_or_else(String::new, |v| format!("{v}"))
 }
@@ -906,16 +898,15 @@ fn csv_bytes(v: Option<u64>) -> String {
 
 /// The CSV: one line per configuration, then the other kernels.
 pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, Elf>) -> String {
-    let mut s = CSV_COLUMNS.join(",");
-    s.push('\n');
+    let mut text = crate::csv_text::CsvText::new(CSV_COLUMNS);
     for r in rows {
         let fields = [
-            csv_field(&r.key.family),
-            csv_field(&r.key.name),
+            r.key.family.clone(),
+            r.key.name.clone(),
             r.key.n.to_string(),
-            csv_field(&r.key.number),
+            r.key.number.clone(),
             r.error.map_or_else(String::new, |e| format!("{e:.6e}")),
-            csv_field(&r.measure),
+            r.measure.clone(),
             r.host_ns.map_or_else(String::new, |v| format!("{v:.2}")),
             r.host_instr.map_or_else(String::new, |v| format!("{v:.1}")),
             csv_num(r.m4f),
@@ -924,8 +915,7 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             csv_bytes(r.state_bytes),
             csv_bytes(r.params_bytes),
         ];
-        s.push_str(&fields.join(","));
-        s.push('\n');
+        text.record(&fields);
     }
     // Other kernels: one line per family, name, n and type, M4F and M3
     // figures side by side.
@@ -937,10 +927,10 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
         });
         let any = a.or(b);
         let fields = [
-            csv_field(&key.family),
-            csv_field(&key.name),
+            key.family.clone(),
+            key.name.clone(),
             key.n.to_string(),
-            csv_field(&key.number),
+            key.number.clone(),
             String::new(),
             "-".into(),
             String::new(),
@@ -951,10 +941,9 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             csv_bytes(any.and_then(|l| l.state_bytes)),
             csv_bytes(any.and_then(|l| l.params_bytes)),
         ];
-        s.push_str(&fields.join(","));
-        s.push('\n');
+        text.record(&fields);
     }
-    s
+    text.finish()
 }
 
 /// The plot: every row with an error and an M4F figure.
