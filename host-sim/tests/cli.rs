@@ -540,3 +540,40 @@ fn a_test_over_frequency_is_plotted_against_frequency_and_png_on_request() {
         ]
     );
 }
+
+#[cfg(unix)]
+#[test]
+fn a_write_that_fails_midway_names_its_file_and_leaves_the_previous_output() {
+    // A file-size limit (with its signal ignored) makes every write past
+    // 200 KiB fail, as a full disk does.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    sim()
+        .args(["run", "scenes/maxwell4.toml", "--out"])
+        .arg(&out)
+        .current_dir(root())
+        .assert()
+        .code(0);
+    let before = fs::read(out.join("trace.csv")).unwrap();
+    let binary = assert_cmd::cargo::cargo_bin("bushing-sim");
+    let script = format!(
+        "trap '' XFSZ; ulimit -f 200; exec '{}' run scenes/seed000/fig-1-24-payne.toml --out '{}'",
+        binary.display(),
+        out.display()
+    );
+    let result = std::process::Command::new("bash")
+        .args(["-c", &script])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&result.stderr);
+    assert_eq!(result.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("trace.csv"), "{stderr}");
+    assert_eq!(fs::read(out.join("trace.csv")).unwrap(), before);
+    assert_eq!(visible(dir.path()), ["out"], "no partial result beside it");
+    assert_eq!(
+        fs::read_dir(dir.path()).unwrap().count(),
+        1,
+        "staging removed"
+    );
+}
