@@ -2,18 +2,21 @@
 //! scene lists are built, kept in a list in the scene's order, and a step
 //! visits only those.
 
+use std::sync::Arc;
+
+use bushing::fractional::{FractionalSpec, Grunwald, GrunwaldState};
 use bushing::iwan::{self, ClampCell, Held, SliderCell};
 use bushing::maxwell::{self, MaxwellCell};
 use bushing::xf::{self, XfCell};
 use bushing::{
     Accumulator, Backbone, Berg, BoucWen, Bushing, BushingState, Compensated, Dahl, Drive, Effect,
     EffectOutput, IwanCellSpec, KfTable, MaxwellForm, MaxwellSpec, Multiplied, Oscillator,
-    OscillatorState, ParamError, Plain, Real, Sts, TurningPoints, XfForm, XfSpec,
+    OscillatorState, Param, ParamError, Plain, Real, Sts, TurningPoints, XfForm, XfSpec,
 };
 
 pub use crate::backbone::{AnyBackbone, MAX_COEFFICIENTS, MAX_POINTS, backbone};
 use crate::scene::{
-    Effect as EffectDesc, Friction, Law, STACK_DEPTH, Scene, Storage, TABLE_POINTS,
+    Effect as EffectDesc, FRACTIONAL_TAPS, Friction, Law, STACK_DEPTH, Scene, Storage, TABLE_POINTS,
 };
 
 /// A Maxwell bank sized at run time; the scheme is the core's
@@ -21,6 +24,8 @@ use crate::scene::{
 #[derive(Debug, Clone)]
 pub struct DynMaxwell<T> {
     form: MaxwellForm,
+    /// The cells at the reference temperature, as given.
+    specs: Vec<MaxwellSpec>,
     cells: Vec<MaxwellCell<T>>,
     tangent_gain: T,
     fraction: f64,
@@ -47,13 +52,35 @@ impl<T: Real> DynMaxwell<T> {
         dt: f64,
         storage: Storage,
     ) -> Result<Self, ParamError> {
+        Self::tuned(form, specs, dt, storage, 1.0)
+    }
+
+    /// The bank of `specs` (at the reference temperature) tuned to the
+    /// shift factor `a_t`: each cell built by the core's constructor with
+    /// its corner ω_i / a_t, as [`bushing::MaxwellBank::shifted`] builds
+    /// them (a_t = 1 leaves every corner as given).
+    fn tuned(
+        form: MaxwellForm,
+        specs: &[MaxwellSpec],
+        dt: f64,
+        storage: Storage,
+        a_t: f64,
+    ) -> Result<Self, ParamError> {
+        let param = Param::scalar("a_t");
+        if !a_t.is_finite() {
+            return Err(ParamError::NotFinite { param });
+        }
+        if a_t <= 0.0 {
+            return Err(ParamError::NotPositive { param, value: a_t });
+        }
         let cells = specs
             .iter()
             .enumerate()
-            .map(|(i, s)| MaxwellCell::new(form, *s, dt, i))
+            .map(|(i, s)| MaxwellCell::new(form, MaxwellSpec::new(s.omega / a_t, s.g), dt, i))
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Self {
             form,
+            specs: specs.to_vec(),
             tangent_gain: maxwell::tangent_gain(&cells),
             cells,
             fraction: specs.iter().map(|s| s.g).sum(),
@@ -221,6 +248,132 @@ fn xf_bank<T: Real>(form: XfForm, specs: &[XfSpec], dt: f64) -> Result<DynXf<T>,
     })
 }
 
+/// Declares [`DynGrunwald`] and its state over a menu of memory lengths.
+macro_rules! grunwald_menu {
+    ($($variant:ident = $n:literal),+ $(,)?) => {
+        /// A Grünwald fractional cell (the core's [`Grunwald`]) whose memory
+        /// length N, a const generic of the core, is picked at run time from
+        /// [`FRACTIONAL_TAPS`](crate::scene::FRACTIONAL_TAPS): one
+        /// monomorphised cell per length. The parameters (N weights) are
+        /// shared, so cloning a built model does not copy them.
+        #[derive(Debug, Clone)]
+        pub enum DynGrunwald<T> {
+            $(
+                #[doc = concat!("N = ", stringify!($n), ".")]
+                $variant(Arc<Grunwald<T, $n>>),
+            )+
+        }
+
+        /// State of a [`DynGrunwald`]: the core's ring of N values, boxed.
+        #[derive(Debug, PartialEq)]
+        pub enum DynGrunwaldState<T> {
+            $(
+                #[doc = concat!("N = ", stringify!($n), ".")]
+                $variant(Box<GrunwaldState<T, $n>>),
+            )+
+        }
+
+        impl<T: Real> Clone for DynGrunwaldState<T> {
+            fn clone(&self) -> Self {
+                match self {
+                    $(Self::$variant(s) => Self::$variant(s.clone()),)+
+                }
+            }
+            /// Copies into the same box when both are of one length: an
+            /// effect list keeps a copy of every state before each step.
+            fn clone_from(&mut self, source: &Self) {
+                match (self, source) {
+                    $((Self::$variant(d), Self::$variant(s)) => (**d).clone_from(s),)+
+                    (d, s) => *d = s.clone(),
+                }
+            }
+        }
+
+        impl<T: Real> DynGrunwald<T> {
+            /// Builds the cell with `taps` history taps (one of the menu)
+            /// for time step `dt`; the core's checks of `spec` and `dt`.
+            pub fn new(spec: FractionalSpec, taps: usize, dt: f64) -> Result<Self, ParamError> {
+                match taps {
+                    $($n => Ok(Self::$variant(Arc::new(Grunwald::new(spec, dt)?))),)+
+                    // The scene reader names the menu; this is its ends.
+                    _ => Err(ParamError::OutOfRange {
+                        param: Param::scalar("taps"),
+                        value: taps as f64,
+                        min: FRACTIONAL_TAPS[0] as f64,
+                        min_open: false,
+                        max: FRACTIONAL_TAPS[FRACTIONAL_TAPS.len() - 1] as f64,
+                    }),
+                }
+            }
+
+            /// Memory length N.
+            pub fn taps(&self) -> usize {
+                match self {
+                    $(Self::$variant(_) => $n,)+
+                }
+            }
+
+            /// Branch share of the complex stiffness over K^∞ at ω (rad/s),
+            /// as (storage, loss): the discrete cell's exact steady state
+            /// ([`Grunwald::branch_response`]).
+            pub fn branch_response(&self, omega: f64) -> (f64, f64) {
+                match self {
+                    $(Self::$variant(c) => c.branch_response(omega),)+
+                }
+            }
+        }
+
+        impl<T: Real> Effect<T> for DynGrunwald<T> {
+            type State = DynGrunwaldState<T>;
+            type Report = EffectOutput<T>;
+
+            fn fraction(&self) -> f64 {
+                match self {
+                    $(Self::$variant(c) => c.fraction(),)+
+                }
+            }
+            fn dt(&self) -> Option<f64> {
+                match self {
+                    $(Self::$variant(c) => c.dt(),)+
+                }
+            }
+            fn rest(&self, x0: T) -> Self::State {
+                match self {
+                    $(Self::$variant(c) => DynGrunwaldState::$variant(Box::new(c.rest(x0))),)+
+                }
+            }
+            #[inline]
+            fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> EffectOutput<T> {
+                match (self, state) {
+                    $((Self::$variant(c), DynGrunwaldState::$variant(s)) => c.step(s, drive),)+
+                    // A state always comes from its own cell's `rest`.
+                    _ => EffectOutput::zero(),
+                }
+            }
+            fn total(report: &EffectOutput<T>) -> EffectOutput<T> {
+                *report
+            }
+            /// The core's refusal, which keeps only what a step writes.
+            #[inline]
+            fn step_if(
+                &self,
+                state: &mut Self::State,
+                drive: &Drive<T>,
+                accept: impl FnOnce(&EffectOutput<T>) -> bool,
+            ) -> Option<EffectOutput<T>> {
+                match (self, state) {
+                    $((Self::$variant(c), DynGrunwaldState::$variant(s)) => {
+                        c.step_if(s, drive, accept)
+                    })+
+                    _ => None,
+                }
+            }
+        }
+    };
+}
+
+grunwald_menu!(X16 = 16, X64 = 64, X256 = 256, X1024 = 1024, X4096 = 4096);
+
 /// Turning-point model with the STS law.
 pub type StsStack<T> = TurningPoints<Sts<T>, STACK_DEPTH>;
 /// Turning-point model with a measured K_f table.
@@ -247,6 +400,8 @@ pub enum AnyEffect<T> {
     BoucWen(BoucWen<T>),
     /// Berg cell.
     Berg(Berg<T>),
+    /// Grünwald fractional cell.
+    Fractional(DynGrunwald<T>),
 }
 
 /// State of one [`AnyEffect`].
@@ -270,6 +425,8 @@ pub enum AnyState<T: Real> {
     BoucWen(<BoucWen<T> as Effect<T>>::State),
     /// Berg cell.
     Berg(<Berg<T> as Effect<T>>::State),
+    /// Grünwald fractional cell.
+    Fractional(<DynGrunwald<T> as Effect<T>>::State),
 }
 
 /// Calls `$f` with the effect inside an [`AnyEffect`] (one arm per kind).
@@ -285,6 +442,7 @@ macro_rules! each_effect {
             AnyEffect::Dahl($x) => $f,
             AnyEffect::BoucWen($x) => $f,
             AnyEffect::Berg($x) => $f,
+            AnyEffect::Fractional($x) => $f,
         }
     };
 }
@@ -307,6 +465,7 @@ impl<T: Real> AnyEffect<T> {
             Self::Dahl(e) => AnyState::Dahl(e.rest(x0)),
             Self::BoucWen(e) => AnyState::BoucWen(e.rest(x0)),
             Self::Berg(e) => AnyState::Berg(e.rest(x0)),
+            Self::Fractional(e) => AnyState::Fractional(e.rest(x0)),
         }
     }
     #[inline(always)]
@@ -324,6 +483,7 @@ impl<T: Real> AnyEffect<T> {
             (Self::Dahl(e), AnyState::Dahl(s)) => go(e, s, drive),
             (Self::BoucWen(e), AnyState::BoucWen(s)) => go(e, s, drive),
             (Self::Berg(e), AnyState::Berg(s)) => go(e, s, drive),
+            (Self::Fractional(e), AnyState::Fractional(s)) => go(e, s, drive),
             // A state always comes from its own effect's `rest`.
             _ => EffectOutput::zero(),
         }
@@ -410,6 +570,7 @@ impl<T: Real> AnyState<T> {
                 d.1 = s.1;
             }
             (Self::Sliders(d), Self::Sliders(s)) | (Self::Xf(d), Self::Xf(s)) => d.clone_from(s),
+            (Self::Fractional(d), Self::Fractional(s)) => d.clone_from(s),
             (d, s) => d.clone_from(s),
         }
     }
@@ -472,6 +633,92 @@ impl<T: Real> Effect<T> for EffectList<T> {
     }
 }
 
+/// Effects as a temperature history re-tunes them: only the Maxwell banks
+/// move, their corners ω_i / a_T (seed 000 eqs 1.46-1.48; see
+/// [`bushing::temperature`] for the direction of a_T); every other effect
+/// is kept as it is.
+pub trait Tuned: Sized {
+    /// The same effect with its Maxwell corners at the shift factor `a_t`,
+    /// absolute (from the corners as given, whatever the effect is tuned to
+    /// now, so repeated re-tunes do not drift).
+    fn shifted(&self, a_t: f64) -> Result<Self, ParamError>;
+}
+
+impl<T: Real> Tuned for DynMaxwell<T> {
+    /// Every cell rebuilt by the core's constructor at ω_i / a_t, as
+    /// [`bushing::MaxwellBank::shifted`] does; the state carries over (it
+    /// holds branch forces or relaxations, not coefficients).
+    fn shifted(&self, a_t: f64) -> Result<Self, ParamError> {
+        Self::tuned(self.form, &self.specs, self.dt, self.storage, a_t)
+    }
+}
+
+/// Effects a temperature leaves as they are.
+macro_rules! untuned {
+    ($($ty:ty),+ $(,)?) => {
+        $(
+            impl<T: Real> Tuned for $ty {
+                fn shifted(&self, _: f64) -> Result<Self, ParamError> {
+                    Ok(self.clone())
+                }
+            }
+        )+
+    };
+}
+
+untuned!(
+    DynIwanClamp<T>,
+    DynIwanSliders<T>,
+    DynXf<T>,
+    StsStack<T>,
+    TableStack<T>,
+    Dahl<T>,
+    BoucWen<T>,
+    Berg<T>,
+    DynGrunwald<T>,
+);
+
+impl Tuned for () {
+    fn shifted(&self, _: f64) -> Result<Self, ParamError> {
+        Ok(())
+    }
+}
+
+impl<E: Tuned> Tuned for (E,) {
+    fn shifted(&self, a_t: f64) -> Result<Self, ParamError> {
+        Ok((self.0.shifted(a_t)?,))
+    }
+}
+
+impl<T: Real> Tuned for AnyEffect<T> {
+    fn shifted(&self, a_t: f64) -> Result<Self, ParamError> {
+        Ok(match self {
+            Self::Maxwell(e) => Self::Maxwell(e.shifted(a_t)?),
+            other => other.clone(),
+        })
+    }
+}
+
+impl<T: Real> Tuned for EffectList<T> {
+    fn shifted(&self, a_t: f64) -> Result<Self, ParamError> {
+        Ok(Self {
+            effects: self
+                .effects
+                .iter()
+                .map(|e| e.shifted(a_t))
+                .collect::<Result<_, _>>()?,
+        })
+    }
+}
+
+/// `bushing` with its effects at the shift factor `a_t` (same backbone).
+fn shifted_bushing<T: Real, E: Effect<T> + Tuned>(
+    bushing: &Bushing<T, AnyBackbone<T>, E>,
+    a_t: f64,
+) -> Result<Bushing<T, AnyBackbone<T>, E>, ParamError> {
+    Bushing::new(bushing.backbone().clone(), bushing.effects().shifted(a_t)?)
+}
+
 /// The effects a scene can name, as built for it.
 pub type SceneEffects<T> = EffectList<T>;
 
@@ -517,6 +764,9 @@ pub fn build<T: Real>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
                 AnyEffect::BoucWen(BoucWen::new(p.alpha, p.a, p.beta, p.gamma, p.n)?)
             }
             EffectDesc::Friction(Friction::Berg(p)) => AnyEffect::Berg(Berg::new(p.f_max, p.x2)?),
+            EffectDesc::Fractional { spec, taps } => {
+                AnyEffect::Fractional(DynGrunwald::new(*spec, *taps, scene.dt)?)
+            }
         });
     }
     Bushing::new(backbone(&scene.backbone)?, EffectList { effects })
@@ -553,7 +803,7 @@ pub struct StepRow<T> {
 }
 
 /// Effects whose per-effect outputs a driver can read after a step.
-pub trait Parts<T: Real>: Effect<T> {
+pub trait Parts<T: Real>: Effect<T> + Tuned {
     /// Appends each effect's output of the step that gave `report` (and
     /// left `state`), in the scene's order.
     fn parts(state: &Self::State, report: &Self::Report, out: &mut Vec<EffectOutput<T>>);
@@ -563,7 +813,7 @@ impl<T: Real> Parts<T> for () {
     fn parts(_: &(), _: &(), _: &mut Vec<EffectOutput<T>>) {}
 }
 
-impl<T: Real, E: Effect<T>> Parts<T> for (E,) {
+impl<T: Real, E: Effect<T> + Tuned> Parts<T> for (E,) {
     #[inline(always)]
     fn parts(_: &Self::State, report: &Self::Report, out: &mut Vec<EffectOutput<T>>) {
         out.push(E::total(&report.0));
@@ -633,6 +883,11 @@ pub trait SceneModel<T: Real> {
     /// does, and returns the wall-clock time of the steps alone (the
     /// model's own state is left untouched).
     fn time_steps(&self, inputs: &[T], x0: T) -> std::time::Duration;
+    /// Re-tunes the Maxwell banks, between two steps, to the shift factor
+    /// `a_t` (absolute: corners ω_i / a_t of the scene's ω_i; 1 as built);
+    /// the state carries over. Nothing is rebuilt when the model is tuned
+    /// to `a_t` already. On error the model is left as it was.
+    fn retune(&mut self, a_t: f64) -> Result<(), ParamError>;
 }
 
 /// A [`Bushing`] of the scene's backbone and effects `E`, with its state.
@@ -641,6 +896,8 @@ struct Compiled<T: Real, E: Effect<T>> {
     state: BushingState<T, E::State>,
     shape: Shape,
     count: usize,
+    /// The shift factor the Maxwell banks are tuned to.
+    shift: f64,
 }
 
 impl<T: Real, E: Parts<T>> SceneModel<T> for Compiled<T, E> {
@@ -684,6 +941,13 @@ impl<T: Real, E: Parts<T>> SceneModel<T> for Compiled<T, E> {
     fn time_steps(&self, inputs: &[T], x0: T) -> std::time::Duration {
         stepping_pass(&self.bushing, inputs, x0)
     }
+    fn retune(&mut self, a_t: f64) -> Result<(), ParamError> {
+        if a_t != self.shift {
+            self.bushing = shifted_bushing(&self.bushing, a_t)?;
+            self.shift = a_t;
+        }
+        Ok(())
+    }
 }
 
 /// Steps `bushing` from rest at `x0` through `inputs`, reading force,
@@ -719,6 +983,7 @@ fn compiled<T: Real + 'static, E: Parts<T> + 'static>(
         state,
         shape,
         count,
+        shift: 1.0,
     }))
 }
 
@@ -757,6 +1022,8 @@ struct OscillatorModel<T: Real> {
     start: (T, T),
     count: usize,
     unconverged: u32,
+    /// The shift factor the Maxwell banks are tuned to.
+    shift: f64,
 }
 
 impl<T: Real + 'static> OscillatorModel<T> {
@@ -776,6 +1043,7 @@ impl<T: Real + 'static> OscillatorModel<T> {
             start,
             count,
             unconverged: 0,
+            shift: 1.0,
         }))
     }
 }
@@ -837,5 +1105,97 @@ impl<T: Real> SceneModel<T> for OscillatorModel<T> {
             std::hint::black_box((o.p, o.force, o.dissipated));
         }
         start.elapsed()
+    }
+    /// The restoring force re-tuned, and the oscillator built on it again
+    /// (its chord slope follows the tangent at rest).
+    fn retune(&mut self, a_t: f64) -> Result<(), ParamError> {
+        if a_t != self.shift {
+            let restoring = shifted_bushing(self.oscillator.restoring(), a_t)?;
+            self.oscillator = Oscillator::new(restoring, self.oscillator.dt())?;
+            self.shift = a_t;
+        }
+        Ok(())
+    }
+}
+
+/// Steps `model` through `inputs` as [`SceneModel::step_into`] does, the
+/// first input being step `done + 1` of `scene`, and follows the scene's
+/// temperature history: before the step that starts at `t = n dt`, for
+/// every `n` (steps done) that is a multiple of `every`, the Maxwell banks
+/// are re-tuned to a_T(T(t)) ([`SceneModel::retune`]). A scene without a
+/// history is stepped by `step_into` alone, in one call.
+pub fn step_scene<T: Real>(
+    scene: &Scene,
+    model: &mut dyn SceneModel<T>,
+    done: u64,
+    inputs: &[T],
+    rows: &mut Vec<StepRow<T>>,
+    parts: &mut Vec<EffectOutput<T>>,
+) -> Result<(), ParamError> {
+    let Some(history) = &scene.temperature else {
+        model.step_into(inputs, rows, parts);
+        return Ok(());
+    };
+    let every = history.every.max(1);
+    let (mut n, mut rest) = (done, inputs);
+    while !rest.is_empty() {
+        if n.is_multiple_of(every) {
+            model.retune(history.shift_at(n as f64 * scene.dt)?)?;
+        }
+        let until = usize::try_from(every - n % every).unwrap_or(usize::MAX);
+        let (now, later) = rest.split_at(rest.len().min(until));
+        model.step_into(now, rows, parts);
+        n += now.len() as u64;
+        rest = later;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fractional_menu_builds_every_listed_length_and_no_other() {
+        let spec = FractionalSpec::hz(5.0, 0.5, 0.6);
+        for n in 0..=2 * FRACTIONAL_TAPS[FRACTIONAL_TAPS.len() - 1] {
+            match DynGrunwald::<f32>::new(spec, n, 1e-3) {
+                Ok(cell) => {
+                    assert!(FRACTIONAL_TAPS.contains(&n), "{n} is not listed");
+                    assert_eq!(cell.taps(), n);
+                    assert_eq!(cell.fraction(), 0.6);
+                    assert_eq!(cell.dt(), Some(1e-3));
+                }
+                Err(e) => {
+                    assert!(!FRACTIONAL_TAPS.contains(&n), "{n}: {e}");
+                    assert!(matches!(e, ParamError::OutOfRange { .. }), "{e}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_fractional_state_is_copied_into_its_own_box() {
+        let cell = DynGrunwald::<f64>::new(FractionalSpec::hz(5.0, 0.5, 0.6), 256, 1e-3).unwrap();
+        let drive = Drive {
+            x: 1.0,
+            dx: 1.0,
+            f_inf: 100.0,
+            df_inf: 100.0,
+            k_inf: 100.0,
+        };
+        let mut stepped = cell.rest(0.0);
+        cell.step(&mut stepped, &drive);
+        let mut copy = cell.rest(0.0);
+        let DynGrunwaldState::X256(boxed) = &copy else {
+            panic!("256 taps");
+        };
+        let before = std::ptr::from_ref(&**boxed);
+        copy.clone_from(&stepped);
+        assert_eq!(copy, stepped);
+        let DynGrunwaldState::X256(boxed) = &copy else {
+            panic!("256 taps");
+        };
+        assert_eq!(std::ptr::from_ref(&**boxed), before, "no new allocation");
     }
 }

@@ -495,6 +495,9 @@ impl Ctx<'_> {
         let per_cycle = w.energy.get(j).copied().unwrap_or(f64::NAN);
         match effect {
             Effect::Maxwell { form, cells, .. } => {
+                if self.scene.temperature.is_some() {
+                    return no("a [temperature] history moves the corners during the run");
+                }
                 let (Kind::Sine(f), Some(k)) = (self.p.kind, self.k_lin) else {
                     return no("the complex modulus needs a sine on a linear backbone");
                 };
@@ -618,6 +621,9 @@ impl Ctx<'_> {
                     swing,
                 )]
             }
+            Effect::Fractional { .. } => no(
+                "not compared here: the scene tests compare the run's modulus with the discrete cell's response, Grunwald::branch_response",
+            ),
         }
     }
 

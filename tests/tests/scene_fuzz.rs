@@ -624,7 +624,9 @@ fn step_model<T: Real + 'static>(scene: &Scene) -> Result<(), String> {
         .map(|n| T::from_f64(profile::displacement(&scene.profile, n as f64 * scene.dt)))
         .collect();
     let (mut rows, mut parts) = (Vec::new(), Vec::new());
-    bushing.step_into(&inputs, &mut rows, &mut parts);
+    // As a run steps it: re-tuned on the scene's temperature history.
+    model::step_scene(scene, bushing.as_mut(), 0, &inputs, &mut rows, &mut parts)
+        .map_err(|e| e.to_string())?;
     assert_eq!(rows.len(), inputs.len(), "one row per step");
     assert_eq!(
         parts.len(),
@@ -705,6 +707,9 @@ fn execute(text: &str, dir: &Path, out: Option<&Path>) -> Result<Outcome, Panic>
     for e in &scene.effects {
         let name = e.name();
         features.push(format!("effect {}", name.split(' ').next().unwrap_or("")));
+    }
+    if scene.temperature.is_some() {
+        features.push("temperature".into());
     }
     Ok(Outcome::Stepped(features, out.is_some()))
 }
@@ -976,6 +981,8 @@ fn check(tally: &Tally) {
         "effect dahl",
         "effect bouc-wen",
         "effect berg",
+        "effect fractional",
+        "temperature",
         "profile Sine",
         "profile Triangle",
     ] {

@@ -78,7 +78,7 @@ pub fn drive_steps<T: Real>(
         rows.clear();
         parts.clear();
         let start = Instant::now();
-        model.step_into(&inputs, &mut rows, &mut parts);
+        crate::model::step_scene(scene, model, n, &inputs, &mut rows, &mut parts)?;
         busy += start.elapsed().as_secs_f64();
         for (k, ((input, demand), row)) in inputs.iter().zip(&demands).zip(&rows).enumerate() {
             let index = n + 1 + k as u64;

@@ -16,7 +16,8 @@ use std::ops::Range;
 use std::path::Path;
 
 use bushing::{
-    Backbone, FirstLoading, IwanCellSpec, MaxwellForm, MaxwellSpec, ParamError, XfForm, XfSpec,
+    Backbone, FirstLoading, FractionalSpec, IwanCellSpec, MaxwellForm, MaxwellSpec, ParamError,
+    ShiftFactor, XfForm, XfSpec,
 };
 
 pub use crate::backbone::BackboneSpec;
@@ -24,7 +25,7 @@ pub use crate::profile::ProfileSpec;
 pub use errors::{Location, SceneError};
 pub use spec::*;
 
-use check::validate_effect;
+use check::{validate_effect, validate_temperature};
 use errors::shape_error;
 
 /// Most bytes of a scene file: scenes are a page of TOML, and a larger
@@ -64,7 +65,56 @@ pub struct Scene {
     /// The ADC the model reads the imposed displacement through (never in
     /// an oscillator scene).
     pub adc: Option<Adc>,
+    /// The temperature history the Maxwell banks follow, if any.
+    pub temperature: Option<Temperature>,
 }
+
+/// A validated `[temperature]`: the Maxwell corners follow a temperature
+/// history, `ω_i(t) = ω_i / a_T(T(t))` (seed 000 eqs 1.46-1.48, with the
+/// usual a_T > 1 on the cold, slow side; see [`bushing::temperature`]).
+/// At every point of the history the law is defined, a_T is finite and
+/// positive, and every shifted Maxwell cell is valid in the working type.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Temperature {
+    /// The shift-factor law.
+    pub law: ShiftFactor,
+    /// (time in s, temperature), times increasing: piecewise linear
+    /// between them, constant before the first and after the last.
+    pub points: Vec<(f64, f64)>,
+    /// Steps between two re-tunes (1: before every step).
+    pub every: u64,
+}
+
+impl Temperature {
+    /// The temperature at time `t` (s): linear between the points,
+    /// constant outside them, and never outside the two points around `t`
+    /// (so never outside the range checked when the scene was read).
+    pub fn at(&self, t: f64) -> f64 {
+        let i = self.points.partition_point(|&(ti, _)| ti <= t);
+        match (
+            i.checked_sub(1).and_then(|j| self.points.get(j)),
+            self.points.get(i),
+        ) {
+            (Some(&(t0, v0)), Some(&(t1, v1))) => {
+                let v = v0 + (v1 - v0) * ((t - t0) / (t1 - t0));
+                v.clamp(v0.min(v1), v0.max(v1))
+            }
+            (Some(&(_, v)), None) | (None, Some(&(_, v))) => v,
+            (None, None) => f64::NAN,
+        }
+    }
+
+    /// The shift factor a_T at time `t` (s), in f64
+    /// ([`ShiftFactor::at`] of [`Temperature::at`]).
+    pub fn shift_at(&self, t: f64) -> Result<f64, ParamError> {
+        self.law.at(self.at(t))
+    }
+}
+
+/// Memory lengths N a scene's fractional cell may have: the core's
+/// `Grunwald<T, N>` is sized at compile time, so a scene picks one of
+/// these (each a cell of its own, see [`crate::model::DynGrunwald`]).
+pub const FRACTIONAL_TAPS: [usize; 5] = [16, 64, 256, 1024, 4096];
 
 /// How the cells of a Maxwell bank store their state (the core's
 /// accumulators).
@@ -136,6 +186,13 @@ pub enum Effect {
     },
     /// A single friction cell.
     Friction(Friction),
+    /// A Grünwald fractional cell.
+    Fractional {
+        /// ω_c (rad/s), α and g.
+        spec: FractionalSpec,
+        /// Memory length N, one of [`FRACTIONAL_TAPS`].
+        taps: usize,
+    },
 }
 
 /// A validated single friction cell (parameters in f64; the model is built
@@ -169,6 +226,7 @@ impl Effect {
             Self::Friction(Friction::Dahl(p)) => format!("dahl alpha={}", p.alpha),
             Self::Friction(Friction::BoucWen(p)) => format!("bouc-wen n={}", p.n),
             Self::Friction(Friction::Berg(_)) => "berg".into(),
+            Self::Fractional { spec, taps } => format!("fractional alpha {} x{taps}", spec.alpha),
         }
     }
 
@@ -178,6 +236,7 @@ impl Effect {
             Self::Maxwell { cells, .. } => cells.iter().map(|c| c.g).sum(),
             Self::Iwan { cells, .. } => cells.iter().map(|c| c.g).sum(),
             Self::Xf { cells, .. } => cells.iter().map(|c| c.g).sum(),
+            Self::Fractional { spec, .. } => spec.g,
             Self::TurningPoints { .. } | Self::Friction(_) => 0.0,
         }
     }
@@ -454,6 +513,17 @@ impl Scene {
                 })
             }
         };
+        let temperature = match raw.temperature {
+            None => None,
+            Some(t) => {
+                let span = t.span();
+                let checked = match run.number {
+                    NumberType::F32 => validate_temperature::<f32>(t.into_inner(), &effects, dt),
+                    NumberType::F64 => validate_temperature::<f64>(t.into_inner(), &effects, dt),
+                };
+                Some(checked.map_err(|m| err(Some(span), format!("temperature{m}")))?)
+            }
+        };
         Ok(Self {
             title: raw.title,
             dt,
@@ -464,6 +534,7 @@ impl Scene {
             trace_every,
             oscillator,
             adc,
+            temperature,
         })
     }
 

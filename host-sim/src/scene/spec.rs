@@ -33,6 +33,41 @@ pub struct SceneFile {
     /// optional.
     #[serde(default)]
     pub adc: Option<Spanned<AdcSpec>>,
+    /// A temperature history the Maxwell banks follow during the run;
+    /// optional.
+    #[serde(default)]
+    pub temperature: Option<Spanned<TemperatureSpec>>,
+}
+
+/// `[temperature]`, as written: a temperature history, piecewise linear in
+/// time, and the shift-factor law that turns it into a_T (seed 000 eqs
+/// 1.46-1.48; [`bushing::temperature`]).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TemperatureSpec {
+    /// "wlf" (needs `c1` and `c2`) or "arrhenius" (needs `activation`).
+    pub law: String,
+    /// WLF C_1 (dimensionless).
+    #[serde(default)]
+    pub c1: Option<f64>,
+    /// WLF C_2 in kelvin.
+    #[serde(default)]
+    pub c2: Option<f64>,
+    /// Reference temperature T_0 (WLF: the unit of the points; Arrhenius:
+    /// kelvin): the temperature at which the cells are as written.
+    pub t_ref: f64,
+    /// Arrhenius E_a / R in kelvin.
+    #[serde(default)]
+    pub activation: Option<f64>,
+    /// (time in s, temperature) pairs, times increasing.
+    pub points: Vec<[f64; 2]>,
+    /// Re-tune every this many steps (default 1).
+    #[serde(default = "default_every")]
+    pub every: i64,
+}
+
+fn default_every() -> i64 {
+    1
 }
 
 /// `[adc]`, as written: the displacement fed to the model is what an ideal
@@ -201,6 +236,18 @@ tagged_table! {
         BoucWen(BoucWenParams),
         /// Berg's friction cell (eq 1.45).
         Berg(BergParams),
+        /// A fractional-derivative cell, the truncated Grünwald sum of
+        /// eqs 1.23-1.25.
+        Fractional {
+            /// Transition frequency f_c in Hz (ω_c = 2π f_c).
+            f_c_hz: f64,
+            /// Order α of the derivative, 0 < α <= 1.
+            alpha: f64,
+            /// Load fraction g.
+            g: f64,
+            /// Memory length N in steps: one of [`super::FRACTIONAL_TAPS`].
+            taps: i64,
+        },
     }
 }
 
@@ -292,6 +339,7 @@ impl EffectSpec {
             Self::Dahl(_) => "dahl",
             Self::BoucWen(_) => "bouc-wen",
             Self::Berg(_) => "berg",
+            Self::Fractional { .. } => "fractional",
         }
     }
 }

@@ -464,3 +464,132 @@ fn location_counts_characters() {
     );
     assert_eq!(Location::of("", 10), Location { line: 1, column: 1 });
 }
+
+/// GOOD with a `[temperature]` table of `body`.
+fn with_temperature(body: &str) -> String {
+    format!("{GOOD}[temperature]\n{body}\n")
+}
+
+#[test]
+fn a_temperature_history_is_linear_between_its_points_and_constant_outside() {
+    let s = Scene::parse(
+        "t.toml",
+        &with_temperature(
+            "law = \"wlf\"\nc1 = 8.86\nc2 = 101.6\nt_ref = 20.0\n\
+             points = [[1.0, 20.0], [3.0, 40.0], [4.0, 0.0]]",
+        ),
+    )
+    .unwrap();
+    let t = s.temperature.unwrap();
+    assert_eq!(t.every, 1, "default: before every step");
+    for (time, want) in [
+        (-1.0, 20.0),
+        (0.0, 20.0),
+        (1.0, 20.0),
+        (2.0, 30.0),
+        (3.0, 40.0),
+        (3.5, 20.0),
+        (4.0, 0.0),
+        (1e9, 0.0),
+    ] {
+        assert_eq!(t.at(time), want, "T({time})");
+    }
+    assert_eq!(t.shift_at(0.0), Ok(1.0));
+    // Colder is slower: a_T > 1 below t_ref.
+    assert!(t.shift_at(5.0).unwrap() > 1.0 && t.shift_at(2.0).unwrap() < 1.0);
+    // Arrhenius in kelvin, re-tuned every 50 steps.
+    let s = Scene::parse(
+        "t.toml",
+        &with_temperature(
+            "law = \"arrhenius\"\nactivation = 12000.0\nt_ref = 293.15\n\
+             points = [[0.0, 273.15]]\nevery = 50",
+        ),
+    )
+    .unwrap();
+    let t = s.temperature.unwrap();
+    assert_eq!(t.every, 50);
+    let want = (12000.0f64 * (1.0 / 273.15 - 1.0 / 293.15)).exp();
+    assert!((t.shift_at(7.0).unwrap() / want - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn temperature_mistakes_name_the_field_at_the_table() {
+    let line = GOOD.lines().count() + 1;
+    for (body, message) in [
+        (
+            "law = \"wlf\"\nc1 = 8.86\nt_ref = 20.0\npoints = [[0.0, 20.0]]",
+            "temperature: law 'wlf' takes c1 and c2",
+        ),
+        (
+            "law = \"wlf\"\nc1 = 8.86\nc2 = -1.0\nt_ref = 20.0\npoints = [[0.0, 20.0]]",
+            "temperature: c2 must be > 0",
+        ),
+        (
+            "law = \"arrhenius\"\nactivation = 1e4\nt_ref = 293.15\npoints = [[0.0, -3.0]]",
+            "temperature.points[0]: temperature -3 is outside the domain of the Arrhenius law",
+        ),
+        (
+            "law = \"wlf\"\nc1 = 8.86\nc2 = 101.6\nt_ref = 20.0\npoints = []",
+            "temperature.points: at least one",
+        ),
+        (
+            "law = \"wlf\"\nc1 = 8.86\nc2 = 101.6\nt_ref = 20.0\npoints = [[0.0, 20.0], [0.0, 30.0]]",
+            "temperature.points[1]: time 0 s is not after",
+        ),
+        (
+            "law = \"wlf\"\nc1 = 8.86\nc2 = 101.6\nt_ref = 20.0\npoints = [[0.0, nan]]",
+            "temperature.points[0]: time and temperature must be finite",
+        ),
+        (
+            "law = \"wlf\"\nc1 = 8.86\nc2 = 101.6\nt_ref = 20.0\npoints = [[0.0, 20.0]]\nevery = 0",
+            "temperature.every must be a whole number >= 1",
+        ),
+        (
+            // a_T = e^967 overflows f64.
+            "law = \"arrhenius\"\nactivation = 1e4\nt_ref = 300.0\npoints = [[0.0, 10.0]]",
+            "temperature.points[0]: temperature 10 gives a shift factor a_T that is not finite",
+        ),
+    ] {
+        let e = Scene::parse("t.toml", &with_temperature(body)).unwrap_err();
+        assert!(e.message.starts_with(message), "{e}");
+        assert_eq!(e.at.map(|l| l.line), Some(line), "{e}");
+    }
+}
+
+#[test]
+fn a_fractional_effect_parses_with_its_menu_of_memory_lengths() {
+    let frac = |taps: &str, alpha: &str| {
+        GOOD.replace(
+            "form = \"rate-exact-ramp\"\ncells = [{ f_hz = 1.0, g = 0.2 }]",
+            &format!("f_c_hz = 2.0\nalpha = {alpha}\ng = 0.4\ntaps = {taps}"),
+        )
+        .replace("\"maxwell\"", "\"fractional\"")
+    };
+    for taps in FRACTIONAL_TAPS {
+        let s = Scene::parse("f.toml", &frac(&taps.to_string(), "0.5")).unwrap();
+        let Effect::Fractional { spec, taps: n } = &s.effects[0] else {
+            panic!("{:?}", s.effects[0]);
+        };
+        assert_eq!((spec.alpha, spec.g, *n), (0.5, 0.4, taps));
+        assert!((spec.omega_c - std::f64::consts::TAU * 2.0).abs() < 1e-12);
+        assert_eq!(s.effects[0].name(), format!("fractional alpha 0.5 x{taps}"));
+        assert_eq!(s.effects[0].fraction(), 0.4);
+    }
+    for (taps, alpha, message) in [
+        ("0", "0.5", "taps = 0 is not one of 16, 64, 256, 1024, 4096"),
+        ("-16", "0.5", "taps = -16 is not one of"),
+        ("4097", "0.5", "taps = 4097 is not one of"),
+        ("64", "0.0", "alpha must be > 0"),
+        ("64", "1.0000001", "alpha = 1.0000001 is outside (0, 1]"),
+    ] {
+        let e = Scene::parse("f.toml", &frac(taps, alpha)).unwrap_err();
+        assert!(
+            e.message
+                .starts_with(&format!("effects[0] (fractional): {message}")),
+            "{e}"
+        );
+        assert_eq!(e.at.map(|l| l.line), Some(10), "{e}");
+    }
+    // Order 1 is a Maxwell cell, and allowed.
+    assert!(Scene::parse("f.toml", &frac("16", "1.0")).is_ok());
+}
