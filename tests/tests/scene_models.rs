@@ -349,3 +349,32 @@ fn retunes_do_not_depend_on_the_chunks() {
     plain.step_into(&inputs, &mut rows_c, &mut parts_c);
     assert_ne!(rows_a, rows_c);
 }
+
+#[test]
+fn validate_compares_the_fractional_cell_with_its_discrete_response() {
+    // The fractional scene under one sine instead of its stepped sines,
+    // in f32 and f64, with a long (4096) and a short (256) memory.
+    let text = std::fs::read_to_string(root().join("scenes/fractional.toml")).unwrap();
+    let start = text.find("[profile]").unwrap();
+    let end = text.find("[output]").unwrap();
+    let sine = "[profile]\ntype = \"sine\"\namplitude = 0.5\nfrequency_hz = 10.0\ncycles = 40\n\n";
+    let base = format!("{}{sine}{}", &text[..start], &text[end..]);
+    for taps in ["4096", "256"] {
+        for number in [NumberType::F32, NumberType::F64] {
+            let text = base.replace("taps = 4096", &format!("taps = {taps}"));
+            let scene = Scene::parse_as("fractional-sine.toml", &text, Path::new(""), Some(number))
+                .unwrap();
+            let report = bushing_sim::validate::validate(&scene).unwrap();
+            assert_eq!(report.refused, 0);
+            let errors: Vec<f64> = report
+                .checks
+                .iter()
+                .filter_map(|c| c.relative_error())
+                .collect();
+            assert_eq!(errors.len(), 2, "K' and K'': {report}");
+            for e in &errors {
+                assert!(e.abs() <= 1e-5, "taps {taps}, {number:?}: {report}");
+            }
+        }
+    }
+}
