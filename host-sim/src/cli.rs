@@ -325,13 +325,12 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
             firmware_log,
             within,
         } => {
-            if within.is_some_and(|w| !(w.is_finite() && w >= 0.0)) {
-                return Err(CliError::Usage(
-                    "--within must be a finite number of newtons >= 0".into(),
-                ));
-            }
-            let c = compare::compare_files(&host_trace, &firmware_log, within)
-                .map_err(CliError::Failed)?;
+            let c = compare::compare_files(&host_trace, &firmware_log, within).map_err(
+                |e| match e {
+                    compare::CompareError::Bound(_) => CliError::Usage(e.to_string()),
+                    _ => CliError::Failed(e.to_string()),
+                },
+            )?;
             print!("{c}");
             match c.first_mismatch {
                 None => Ok(()),

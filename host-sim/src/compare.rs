@@ -84,9 +84,43 @@ pub struct FirmwareLog {
     pub steps: Vec<LogStep>,
 }
 
+/// Why a firmware log and a host trace cannot be compared.
+#[derive(Debug, thiserror::Error)]
+pub enum CompareError {
+    /// A file could not be read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A mistake in a file.
+    #[error("{at}: {what}")]
+    Format {
+        /// `file:line`, or the file.
+        at: String,
+        /// What is wrong.
+        what: String,
+    },
+    /// The two files do not describe the same run.
+    #[error("{0}")]
+    Mismatch(String),
+    /// A bound that is not a finite number of newtons >= 0.
+    #[error("--within must be a finite number >= 0 N, got {0}")]
+    Bound(f64),
+}
+
+fn format_error(at: impl Into<String>, what: impl Into<String>) -> CompareError {
+    CompareError::Format {
+        at: at.into(),
+        what: what.into(),
+    }
+}
+
 /// Reads a firmware log; `name` names it in errors. Lines that are neither
 /// the header nor a step line are ignored.
-pub fn parse_log(name: &str, text: &str) -> Result<FirmwareLog, String> {
+pub fn parse_log(name: &str, text: &str) -> Result<FirmwareLog, CompareError> {
     let mut header: Option<(usize, LogHeader)> = None;
     let mut steps = Vec::new();
     for (k, raw) in text.lines().enumerate() {
@@ -95,11 +129,14 @@ pub fn parse_log(name: &str, text: &str) -> Result<FirmwareLog, String> {
         match words.next() {
             Some("rig-loop") => {
                 if let Some((first, _)) = header {
-                    return Err(format!(
-                        "{name}:{line}: a second rig-loop header (the first is on line {first})"
+                    return Err(format_error(
+                        format!("{name}:{line}"),
+                        format!("a second rig-loop header (the first is on line {first})"),
                     ));
                 }
-                let h = parse_header(words).map_err(|m| format!("{name}:{line}: rig-loop: {m}"))?;
+                let h = parse_header(words).map_err(|m| {
+                    format_error(format!("{name}:{line}"), format!("rig-loop: {m}"))
+                })?;
                 header = Some((line, h));
             }
             Some("step") => {
@@ -111,8 +148,9 @@ pub fn parse_log(name: &str, text: &str) -> Result<FirmwareLog, String> {
         }
     }
     let Some((_, header)) = header else {
-        return Err(format!(
-            "{name}: no header line `rig-loop number=<f32|q16> lsb_mm=<float> rate_hz=<float>`"
+        return Err(format_error(
+            name,
+            "no header line `rig-loop number=<f32|q16> lsb_mm=<float> rate_hz=<float>`",
         ));
     };
     Ok(FirmwareLog { header, steps })
@@ -187,42 +225,46 @@ pub struct TraceRow {
 
 /// Reads the `time_s`, `x_mm` and `force_N` columns of a `trace.csv`
 /// with the `csv` crate; `name` names it in errors (with the file's line).
-pub fn parse_trace(name: &str, text: &str) -> Result<Vec<TraceRow>, String> {
+pub fn parse_trace(name: &str, text: &str) -> Result<Vec<TraceRow>, CompareError> {
     let mut reader = csv::ReaderBuilder::new()
         .flexible(true)
         .trim(csv::Trim::All)
         .from_reader(text.as_bytes());
     let header = reader
         .headers()
-        .map_err(|e| format!("{name}: {e}"))?
+        .map_err(|e| format_error(name, e.to_string()))?
         .clone();
     if header.is_empty() {
-        return Err(format!("{name}: empty file (no header row)"));
+        return Err(format_error(name, "empty file (no header row)"));
     }
     let find = |c: &str| {
         header.iter().position(|h| h == c).ok_or_else(|| {
             let shown: Vec<&str> = header.iter().collect();
-            format!(
-                "{name}:1: no column '{c}' (the header has {}): not a bushing-sim trace",
-                shown.join(",")
+            format_error(
+                format!("{name}:1"),
+                format!(
+                    "no column '{c}' (the header has {}): not a bushing-sim trace",
+                    shown.join(",")
+                ),
             )
         })
     };
     let (t, x, f) = (find("time_s")?, find("x_mm")?, find("force_N")?);
     let mut rows = Vec::new();
     for record in reader.records() {
-        let record = record.map_err(|e| format!("{name}: {e}"))?;
+        let record = record.map_err(|e| format_error(name, e.to_string()))?;
         let line = record.position().map_or(0, |p| p.line() as usize);
         if record.iter().all(str::is_empty) {
             continue;
         }
         let cell = |i: usize, c: &str| {
+            let at = format!("{name}:{line}");
             let v = record.get(i).ok_or_else(|| {
-                format!("{name}:{line}: no {c} (the row has {} cells)", record.len())
+                format_error(&at, format!("no {c} (the row has {} cells)", record.len()))
             })?;
             v.parse::<f64>().map_err(|_| {
                 let v: String = v.chars().take(40).flat_map(char::escape_debug).collect();
-                format!("{name}:{line}: {c}: expected a number, got '{v}'")
+                format_error(&at, format!("{c}: expected a number, got '{v}'"))
             })
         };
         rows.push(TraceRow {
@@ -333,11 +375,11 @@ pub fn compare(
     trace: &[TraceRow],
     log: &FirmwareLog,
     within: Option<f64>,
-) -> Result<Comparison, String> {
+) -> Result<Comparison, CompareError> {
     if let Some(n) = within
         && !(n.is_finite() && n >= 0.0)
     {
-        return Err(format!("--within must be a finite number >= 0 N, got {n}"));
+        return Err(CompareError::Bound(n));
     }
     let h = log.header;
     for (k, s) in log.steps.iter().enumerate() {
@@ -348,19 +390,22 @@ pub fn compare(
             } else {
                 format!("step {expected} missing")
             };
-            return Err(format!(
-                "firmware log line {}: step {} where step {expected} is expected ({what}): steps must be consecutive from 1",
-                s.line, s.index
+            return Err(format_error(
+                format!("firmware log line {}", s.line),
+                format!(
+                    "step {} where step {expected} is expected ({what}): steps must be consecutive from 1",
+                    s.index
+                ),
             ));
         }
     }
     if log.steps.len() != trace.len() {
-        return Err(format!(
+        return Err(CompareError::Mismatch(format!(
             "the firmware log has {} steps and the trace {} rows: they must be equal \
              (a trace written with trace_every = 1 over the same profile)",
             log.steps.len(),
             trace.len()
-        ));
+        )));
     }
     let mut c = Comparison {
         header: h,
@@ -459,9 +504,17 @@ pub fn compare_files(
     trace_file: &std::path::Path,
     log_file: &std::path::Path,
     within: Option<f64>,
-) -> Result<Comparison, String> {
+) -> Result<Comparison, CompareError> {
+    if let Some(n) = within
+        && !(n.is_finite() && n >= 0.0)
+    {
+        return Err(CompareError::Bound(n));
+    }
     let read = |f: &std::path::Path| {
-        std::fs::read_to_string(f).map_err(|e| format!("{}: {e}", f.display()))
+        std::fs::read_to_string(f).map_err(|source| CompareError::Read {
+            path: f.to_path_buf(),
+            source,
+        })
     };
     let trace = parse_trace(&trace_file.display().to_string(), &read(trace_file)?)?;
     let log = parse_log(&log_file.display().to_string(), &read(log_file)?)?;
@@ -492,7 +545,7 @@ mod tests {
         (trace, log)
     }
 
-    fn run(trace: &str, log: &str, within: Option<f64>) -> Result<Comparison, String> {
+    fn run(trace: &str, log: &str, within: Option<f64>) -> Result<Comparison, CompareError> {
         let t = parse_trace("trace.csv", trace)?;
         let l = parse_log("fw.log", log)?;
         compare(&t, &l, within)
@@ -544,7 +597,7 @@ mod tests {
             .filter(|l| !l.starts_with("step 2 "))
             .map(|l| format!("{l}\n"))
             .collect();
-        let e = run(&trace, &gap, None).unwrap_err();
+        let e = run(&trace, &gap, None).unwrap_err().to_string();
         assert!(
             e.contains("line 4: step 3 where step 2 is expected (step 2 missing)"),
             "{e}"
@@ -555,11 +608,11 @@ mod tests {
             .filter(|l| !l.starts_with("step 4 "))
             .map(|l| format!("{l}\n"))
             .collect();
-        let e = run(&trace, &short, None).unwrap_err();
+        let e = run(&trace, &short, None).unwrap_err().to_string();
         assert!(e.contains("3 steps and the trace 4 rows"), "{e}");
         // A duplicated step.
         let twice = log.replace("step 2 ", "step 1 ");
-        let e = run(&trace, &twice, None).unwrap_err();
+        let e = run(&trace, &twice, None).unwrap_err().to_string();
         assert!(e.contains("step 1 again or out of order"), "{e}");
     }
 
@@ -599,18 +652,28 @@ mod tests {
         .unwrap();
         assert_eq!(l.steps.len(), 1);
         assert_eq!(l.steps[0].line, 6);
-        let e = parse_log("fw.log", "step 1 0 00000000\n").unwrap_err();
+        let e = parse_log("fw.log", "step 1 0 00000000\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("fw.log: no header line"), "{e}");
-        let e = parse_log("fw.log", "rig-loop number=f16 lsb_mm=1 rate_hz=1\n").unwrap_err();
+        let e = parse_log("fw.log", "rig-loop number=f16 lsb_mm=1 rate_hz=1\n")
+            .unwrap_err()
+            .to_string();
         assert_eq!(e, "fw.log:1: rig-loop: number 'f16' is not one of f32, q16");
-        let e = parse_log("fw.log", "rig-loop number=f32 lsb_mm=0 rate_hz=1\n").unwrap_err();
+        let e = parse_log("fw.log", "rig-loop number=f32 lsb_mm=0 rate_hz=1\n")
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("lsb_mm must be a finite number > 0, got '0'"),
             "{e}"
         );
-        let e = parse_log("fw.log", "rig-loop number=f32 rate_hz=1\n").unwrap_err();
+        let e = parse_log("fw.log", "rig-loop number=f32 rate_hz=1\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("needs number"), "{e}");
-        let e = parse_trace("t.csv", "time_s,x_mm\n").unwrap_err();
+        let e = parse_trace("t.csv", "time_s,x_mm\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("no column 'force_N'"), "{e}");
     }
 

@@ -577,3 +577,22 @@ fn a_write_that_fails_midway_names_its_file_and_leaves_the_previous_output() {
         "staging removed"
     );
 }
+
+#[test]
+fn compare_trace_refuses_a_bad_bound_and_names_a_missing_file() {
+    sim()
+        .args([
+            "compare-trace",
+            "no-trace.csv",
+            "no-firmware.log",
+            "--within=-1",
+        ])
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--within must be a finite number"));
+    sim()
+        .args(["compare-trace", "no-trace.csv", "no-firmware.log"])
+        .assert()
+        .code(1)
+        .stderr(predicate::str::contains("no-trace.csv"));
+}
