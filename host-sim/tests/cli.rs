@@ -18,9 +18,11 @@ fn scene(name: &str) -> PathBuf {
     root().join("scenes").join(name)
 }
 
+/// The built binary, run from the workspace root (scene paths are
+/// relative to it), with a timeout so that a hang fails.
 fn sim() -> Command {
     let mut c = Command::cargo_bin("bushing-sim").unwrap();
-    c.timeout(Duration::from_secs(120));
+    c.timeout(Duration::from_secs(120)).current_dir(root());
     c
 }
 
@@ -60,7 +62,6 @@ fn usage_errors_exit_2() {
         .stderr(predicate::str::contains("unrecognized subcommand"));
     sim()
         .args(["run", "scenes/quickstart.toml"])
-        .current_dir(root())
         .assert()
         .code(2)
         .stderr(predicate::str::contains("--out <OUT>"));
@@ -73,13 +74,11 @@ fn usage_errors_exit_2() {
             "--number",
             "f16",
         ])
-        .current_dir(root())
         .assert()
         .code(2)
         .stderr(predicate::str::contains("invalid value 'f16'"));
     sim()
         .args(["validate", "scenes/maxwell4.toml", "--tolerance", "nan"])
-        .current_dir(root())
         .assert()
         .code(2)
         .stderr(predicate::str::contains("--tolerance must be a finite"));
@@ -191,12 +190,10 @@ fn a_run_whose_steps_are_refused_exits_3_unless_allowed() {
 fn validate_exits_3_beyond_its_tolerance_or_with_refused_steps() {
     sim()
         .args(["validate", "scenes/maxwell4.toml"])
-        .current_dir(root())
         .assert()
         .code(0);
     sim()
         .args(["validate", "scenes/maxwell4.toml", "--tolerance", "1e-6"])
-        .current_dir(root())
         .assert()
         .code(3)
         .stderr(predicate::str::contains(
@@ -223,7 +220,6 @@ fn json_summaries_parse() {
     let out = sim()
         .args(["run", "scenes/maxwell4.toml", "--json", "--out"])
         .arg(dir.path().join("out"))
-        .current_dir(root())
         .assert()
         .code(0)
         .get_output()
@@ -235,7 +231,6 @@ fn json_summaries_parse() {
     assert_eq!(v["number"], "f32");
     let out = sim()
         .args(["validate", "scenes/maxwell4.toml", "--json"])
-        .current_dir(root())
         .assert()
         .code(0)
         .get_output()
@@ -289,7 +284,6 @@ fn an_output_estimated_beyond_the_limit_is_refused_before_stepping() {
             "--out",
         ])
         .arg(dir.path().join("out"))
-        .current_dir(root())
         .assert()
         .code(2)
         .stderr(predicate::str::contains("--max-output"));
@@ -313,7 +307,6 @@ fn a_new_run_replaces_the_old_output_whole_and_follows_no_link() {
     sim()
         .args(["run", "scenes/maxwell4.toml", "--out"])
         .arg(&out)
-        .current_dir(root())
         .assert()
         .code(0);
     assert!(visible(&out).contains(&"modulus.csv".to_string()));
@@ -327,7 +320,6 @@ fn a_new_run_replaces_the_old_output_whole_and_follows_no_link() {
     sim()
         .args(["run", "scenes/sts-triangles.toml", "--out"])
         .arg(&out)
-        .current_dir(root())
         .assert()
         .code(0);
     assert_eq!(fs::read_to_string(&victim).unwrap(), "precious");
@@ -354,7 +346,6 @@ fn a_new_run_replaces_the_old_output_whole_and_follows_no_link() {
     sim()
         .args(["run", "scenes/quickstart.toml", "--out"])
         .arg(&home)
-        .current_dir(root())
         .assert()
         .code(2)
         .stderr(predicate::str::contains("is not an earlier output"));
@@ -368,7 +359,6 @@ fn a_killed_run_leaves_the_previous_output_whole() {
     sim()
         .args(["run", "scenes/quickstart.toml", "--out"])
         .arg(&out)
-        .current_dir(root())
         .assert()
         .code(0);
     let before = fs::read(out.join("trace.csv")).unwrap();
@@ -400,7 +390,6 @@ fn an_io_error_names_its_file_and_exits_1() {
     sim()
         .args(["run", "scenes/quickstart.toml", "--out"])
         .arg(file.join("out"))
-        .current_dir(root())
         .assert()
         .code(1)
         .stderr(predicate::str::contains("plain-file"));
@@ -417,12 +406,10 @@ fn a_replay_may_not_leave_the_scene_folder_when_confined() {
     // scenes/profile-replay.toml reads ../tests/data/replay-displacement.csv.
     sim()
         .args(["validate", "scenes/profile-replay.toml"])
-        .current_dir(root())
         .assert()
         .code(0);
     sim()
         .args(["validate", "--confine", "scenes/profile-replay.toml"])
-        .current_dir(root())
         .assert()
         .code(2)
         .stderr(predicate::str::contains("outside the scene's folder"));
@@ -512,7 +499,6 @@ fn a_test_over_frequency_is_plotted_against_frequency_and_png_on_request() {
     sim()
         .args(["run", "scenes/profile-stepped-sine.toml", "--png", "--out"])
         .arg(&out)
-        .current_dir(root())
         .assert()
         .code(0);
     let svg = fs::read_to_string(out.join("modulus-frequency.svg")).unwrap();
@@ -525,7 +511,6 @@ fn a_test_over_frequency_is_plotted_against_frequency_and_png_on_request() {
     sim()
         .args(["run", "scenes/quickstart.toml", "--out"])
         .arg(&out)
-        .current_dir(root())
         .assert()
         .code(0);
     assert_eq!(
@@ -551,7 +536,6 @@ fn a_write_that_fails_midway_names_its_file_and_leaves_the_previous_output() {
     sim()
         .args(["run", "scenes/maxwell4.toml", "--out"])
         .arg(&out)
-        .current_dir(root())
         .assert()
         .code(0);
     let before = fs::read(out.join("trace.csv")).unwrap();
