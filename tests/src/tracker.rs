@@ -2,8 +2,8 @@
 //! instantaneous modulus of a Maxwell bank.
 
 use bushing::tracker::{
-    Channel, Filter, Measured, ModalTracker, ModeInit, ModulusSpec, ModulusTracker, SensorFit,
-    SensorSpec, SineSpec, Tuning, fit_first_period,
+    Channel, Filter, Measured, ModalTracker, ModulusSpec, ModulusTracker, SensorFit, SensorSpec,
+    SineSpec, Tuning, fit_first_period,
 };
 use bushing::{Bushing, MaxwellBank, MaxwellForm, MaxwellSpec, Polynomial};
 
@@ -28,21 +28,8 @@ pub(crate) fn modal_tracker_free_decay_f32(filter: Filter) -> CaseResult {
     };
     let (a0, b0) = accel(0.0);
     let noise = libm::sqrt((a0 * a0 + b0 * b0) / 2.0) * 1e-2;
-    let tracker = ModalTracker::<f32, 4>::new(
-        dt,
-        &[SensorSpec {
-            measured: Measured::Acceleration,
-            noise,
-        }],
-        &[ModeInit {
-            frequency: f0 * 1.005,
-            damping: zeta + 0.002,
-        }],
-        &[(a0 * 1.05, b0 * 1.05)],
-        &Tuning::default(),
-        filter,
-    )
-    .map_err(param)?;
+    let tracker = bushing_kernels::offset_tracker::<f32>(dt, f0, zeta, (a0, b0), noise, filter)
+        .map_err(param)?;
     let mut state = tracker.start();
     let mut rng = Noise::new(5);
     for step in 1..=(10.0 * per) as usize {

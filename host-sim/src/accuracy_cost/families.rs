@@ -9,7 +9,7 @@
 use std::f64::consts::TAU;
 
 use bushing::discretize::Segalman;
-use bushing::tracker::{Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning, UtParams};
+use bushing::tracker::{Filter, UtParams};
 use bushing::{
     Accumulator, Bushing, Compensated, Drive, Effect, MaxwellBank, MaxwellForm, MaxwellSpec,
     Multiplied, ParamError, Plain, Polynomial, Real, XfBank, XfForm, XfSpec,
@@ -434,20 +434,7 @@ pub fn tracker_errors<T: Real>(filter: Filter, seeds: u64) -> Result<(f64, f64),
     let samples = (periods as f64 * TAU / (wd * dt)).round() as usize;
     let (mut sf, mut sz) = (0.0, 0.0);
     for seed in 0..seeds {
-        let tracker = ModalTracker::<T, 4>::new(
-            dt,
-            &[SensorSpec {
-                measured: Measured::Acceleration,
-                noise,
-            }],
-            &[ModeInit {
-                frequency: f0 * 1.005,
-                damping: zeta + 0.002,
-            }],
-            &[(a0 * 1.05, b0 * 1.05)],
-            &Tuning::default(),
-            filter,
-        )?;
+        let tracker = bushing_kernels::offset_tracker::<T>(dt, f0, zeta, (a0, b0), noise, filter)?;
         let mut rng = Noise::new(seed + 1);
         let mut state = tracker.start();
         for k in 1..=samples {
