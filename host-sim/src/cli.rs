@@ -11,8 +11,9 @@
 //!
 //! Errors go to stderr; a scene error shows the scene's line with a caret
 //! under the place at fault. With `--json`, `run` and `validate` print
-//! their summary as one JSON object on stdout, and on failure an object
-//! with the error and the exit code.
+//! one JSON object on stdout whatever happens: their summary with
+//! `exit_code` (and `error` when a check failed), or only the error and
+//! the exit code when the command could not run.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -222,6 +223,9 @@ pub enum CliError {
     /// The work completed and a check failed.
     #[error("{0}")]
     Check(String),
+    /// A failure already printed in the command's JSON object.
+    #[error(transparent)]
+    Reported(Box<CliError>),
 }
 
 impl CliError {
@@ -238,6 +242,7 @@ impl CliError {
             },
             Self::Failed(_) => 1,
             Self::Check(_) => 3,
+            Self::Reported(e) => e.code(),
         }
     }
 }
@@ -254,7 +259,7 @@ pub fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             report(&e);
-            if json {
+            if json && !matches!(e, CliError::Reported(_)) {
                 let value = serde_json::json!({
                     "error": e.to_string(),
                     "exit_code": e.code(),
@@ -367,23 +372,38 @@ fn run_command(args: &RunArgs) -> Result<(), CliError> {
         png: args.png,
     };
     let summary = run::run_with(&scene, &args.out, options)?;
-    if args.json {
-        let value =
-            serde_json::to_string_pretty(&summary).map_err(|e| CliError::Failed(e.to_string()))?;
-        println!("{value}");
-    } else {
-        print!("{summary}");
-    }
-    if summary.refused > 0 && !args.allow_refused {
-        return Err(CliError::Check(format!(
+    let failure = (summary.refused > 0 && !args.allow_refused).then(|| {
+        CliError::Check(format!(
             "{} of {} steps were refused (their effect columns in {} are nan); \
              --allow-refused accepts such a run",
             summary.refused,
             summary.steps,
             args.out.join("trace.csv").display()
-        )));
+        ))
+    });
+    if !args.json {
+        print!("{summary}");
+        return failure.map_or(Ok(()), Err);
     }
-    Ok(())
+    let mut value = serde_json::to_value(&summary).map_err(|e| CliError::Failed(e.to_string()))?;
+    json_outcome(&mut value, failure)
+}
+
+/// Adds the outcome to a command's JSON object and prints it: one object
+/// on stdout whatever happens (a failure is then not printed again).
+fn json_outcome(value: &mut serde_json::Value, failure: Option<CliError>) -> Result<(), CliError> {
+    let code = failure.as_ref().map_or(0, CliError::code);
+    if let Some(object) = value.as_object_mut() {
+        object.insert("exit_code".into(), code.into());
+        if let Some(e) = &failure {
+            object.insert("error".into(), e.to_string().into());
+        }
+    }
+    println!("{value:#}");
+    match failure {
+        None => Ok(()),
+        Some(e) => Err(CliError::Reported(Box::new(e))),
+    }
 }
 
 fn validate_command(args: &ValidateArgs) -> Result<(), CliError> {
@@ -396,36 +416,36 @@ fn validate_command(args: &ValidateArgs) -> Result<(), CliError> {
     let scene = args.scene.load()?;
     let report = validate::validate(&scene).map_err(CliError::Failed)?;
     let beyond = report.beyond(args.tolerance);
-    if args.json {
-        let value = serde_json::json!({
-            "report": report,
-            "tolerance": args.tolerance,
-            "passed": beyond.is_empty() && report.refused == 0,
-        });
-        println!("{value:#}");
-    } else {
-        print!("{report}");
-    }
-    if report.refused > 0 {
-        return Err(CliError::Check(format!(
+    let failure = if report.refused > 0 {
+        Some(CliError::Check(format!(
             "{} steps were refused: the run is no comparison with the references",
             report.refused
-        )));
-    }
-    match beyond.as_slice() {
-        [] => Ok(()),
-        worst => Err(CliError::Check(format!(
+        )))
+    } else if beyond.is_empty() {
+        None
+    } else {
+        Some(CliError::Check(format!(
             "{} of {} checks beyond the tolerance of {:e}: {}",
-            worst.len(),
+            beyond.len(),
             report.checks.len(),
             args.tolerance,
-            worst
+            beyond
                 .iter()
                 .map(|c| format!("{}: {}", c.effect, c.what))
                 .collect::<Vec<_>>()
                 .join("; ")
-        ))),
+        )))
+    };
+    if !args.json {
+        print!("{report}");
+        return failure.map_or(Ok(()), Err);
     }
+    let mut value = serde_json::json!({
+        "report": report,
+        "tolerance": args.tolerance,
+        "passed": failure.is_none(),
+    });
+    json_outcome(&mut value, failure)
 }
 
 /// Prints a report, or writes it whole into `out` (a temporary file

@@ -235,7 +235,9 @@ fn swap_into_place(staged: &Path, target: &Path) -> Result<(), OutputError> {
     }
     // Without an atomic exchange: the earlier output is moved aside first,
     // so that it is whole under its hidden name if the process dies here.
-    let aside = staged.with_extension("old");
+    let mut aside = staged.as_os_str().to_owned();
+    aside.push(".old");
+    let aside = PathBuf::from(aside);
     fs::rename(target, &aside).map_err(OutputError::io(target))?;
     if let Err(e) = fs::rename(staged, target) {
         let _ = fs::rename(&aside, target);

@@ -238,6 +238,7 @@ fn json_summaries_parse() {
         .clone();
     let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
     assert_eq!(v["passed"], true);
+    assert_eq!(v["exit_code"], 0);
     assert_eq!(v["report"]["checks"].as_array().unwrap().len(), 5);
     let out = sim()
         .args(["validate", "no-such-scene.toml", "--json"])
@@ -579,4 +580,52 @@ fn compare_trace_refuses_a_bad_bound_and_names_a_missing_file() {
         .assert()
         .code(1)
         .stderr(predicate::str::contains("no-trace.csv"));
+}
+
+#[test]
+fn json_is_one_object_even_when_a_check_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let huge = edited(
+        dir.path(),
+        "profile-sweep.toml",
+        "amplitude = 0.5 ",
+        "amplitude = 1e308 ",
+    );
+    let out = sim()
+        .arg("run")
+        .arg(&huge)
+        .args(["--json", "--out"])
+        .arg(dir.path().join("out"))
+        .assert()
+        .code(3)
+        .get_output()
+        .stdout
+        .clone();
+    // `from_slice` refuses trailing data: a second object would fail here.
+    let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(v["exit_code"], 3);
+    assert_eq!(v["refused"], 40000);
+    assert!(v["error"].as_str().unwrap().contains("steps were refused"));
+    let out = sim()
+        .args([
+            "validate",
+            "scenes/maxwell4.toml",
+            "--json",
+            "--tolerance",
+            "1e-6",
+        ])
+        .assert()
+        .code(3)
+        .get_output()
+        .stdout
+        .clone();
+    let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    assert_eq!(v["passed"], false);
+    assert_eq!(v["exit_code"], 3);
+    assert!(
+        v["error"]
+            .as_str()
+            .unwrap()
+            .contains("beyond the tolerance")
+    );
 }
