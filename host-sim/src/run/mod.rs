@@ -1,8 +1,11 @@
-//! Running a scene: step the bushing over the profile, write the trace,
-//! the modulus points and the plots, and measure the cost of the steps
-//! alone.
+//! Running a scene: step the bushing over the profile through the one
+//! stepping pipeline ([`drive`]) with its sinks (the trace, the plots and
+//! modulus probe, the progress bar), measure the cost of the steps alone,
+//! and write everything into a staged output folder that appears whole or
+//! not at all ([`crate::output`]). Before stepping, the output is estimated
+//! and a run above [`Options::max_output`] is refused.
 //!
-//! Plots (SVG, axes labelled with units):
+//! Plots (SVG, and PNG with [`Options::png`]; axes labelled with units):
 //!
 //! - `force-displacement.svg`: total force and long-term elastic branch
 //!   against displacement;
@@ -13,7 +16,9 @@
 //!   energy (mJ), total and per effect;
 //! - `modulus-amplitude.svg` (profiles with sine portions only): the
 //!   instantaneous complex modulus against the imposed amplitude, in the
-//!   style of seed 000 Fig 1.24, also written as `modulus.csv`.
+//!   style of seed 000 Fig 1.24, also written as `modulus.csv`;
+//! - `modulus-frequency.svg` (sines at two frequencies or more): K', K''
+//!   and the loss factor against frequency.
 //!
 //! Long runs are decimated for the time plots by keeping the smallest and
 //! the largest value of each of a few thousand buckets, so that an
