@@ -65,6 +65,7 @@ step "lints (Cortex-M4F: core, suite, firmware)"
 cargo clippy -p bushing --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing --features micromath --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing --features fixed --target thumbv7m-none-eabi -- -D warnings
+cargo clippy -p bushing --features serde --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing-kernels --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing-kernels --features fixed --target thumbv7m-none-eabi -- -D warnings
 cargo clippy -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m --test hard_cases -- -D warnings

@@ -26,6 +26,8 @@
 //! whose restoring force is any bushing (the Iwan oscillator of the joint
 //! thesis, "seed 004"), and [`tracker`] follows the frequency and damping
 //! of measured modes on line (the modal Kalman tracker of seed 004).
+//! With feature `serde`, [`specs`] reads the parameter specs from a
+//! configuration file through their checked constructors (no alloc).
 //!
 //! ## The contract
 //!
@@ -89,6 +91,8 @@ pub mod maxwell;
 pub mod oscillator;
 pub mod real;
 pub mod six_dof;
+#[cfg(feature = "serde")]
+pub mod specs;
 pub mod stack;
 pub mod temperature;
 pub mod tracker;

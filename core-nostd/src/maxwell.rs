@@ -72,6 +72,11 @@ use crate::real::{Exponentials, LibmExp, Real};
 
 /// The discrete form of a Maxwell cell (see the module table).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Deserialize, serde::Serialize),
+    serde(rename_all = "kebab-case")
+)]
 pub enum MaxwellForm {
     /// Load relaxation, explicit Euler (eq 1.13).
     LoadExplicit,
@@ -269,6 +274,39 @@ fn coefficients<U: Real, E: Exponentials<U>>(
 /// Sum of the cells' tangent shares, in the working type.
 pub fn tangent_gain<T: Real>(cells: &[MaxwellCell<T>]) -> T {
     T::from_f64(cells.iter().map(MaxwellCell::tangent_share).sum())
+}
+
+/// Branch share of the complex stiffness over K^∞ of discrete cells in
+/// `form` at the angle `theta = ω dt` per step, as (storage, loss): their
+/// exact steady-state response with the coefficients as stored in `T`,
+/// `Σ_i H_i(e^{iθ})` with `H_i(z) = (p (1 - z^-1) + q) / (1 - (1 - d)
+/// z^-1)` (plus g_i for the load forms, whose state is the relaxation).
+/// The static share `1 - Σ g_i` is not included. f64 with libm trig:
+/// reports and tests, for the const-size bank and run-time sized ones.
+pub fn branch_response<T: Real>(
+    form: MaxwellForm,
+    cells: &[MaxwellCell<T>],
+    theta: f64,
+) -> (f64, f64) {
+    let (c, s) = (libm::cos(theta), libm::sin(theta));
+    let mut sum = (0.0, 0.0);
+    for cell in cells {
+        let (d, p, q) = (
+            cell.decay.to_f64(),
+            cell.rate_gain.to_f64(),
+            cell.level_gain.to_f64(),
+        );
+        // z^-1 = c - i s
+        let (num_re, num_im) = (p * (1.0 - c) + q, p * s);
+        let a = 1.0 - d;
+        let (den_re, den_im) = (1.0 - a * c, a * s);
+        let norm = den_re * den_re + den_im * den_im;
+        let storage = (num_re * den_re + num_im * den_im) / norm;
+        let level = if form.is_load() { cell.g.to_f64() } else { 0.0 };
+        sum.0 += storage + level;
+        sum.1 += (num_im * den_re - num_re * den_im) / norm;
+    }
+    sum
 }
 
 /// Advances a slice of cells by one step: the one implementation of every
@@ -533,33 +571,9 @@ impl<T: Real, const N: usize, A: Accumulator<T>> MaxwellBank<T, N, A> {
     }
 
     /// Branch share of the complex stiffness over K^∞ of the discrete bank
-    /// at ω (rad/s), as (storage, loss): its exact steady-state response
-    /// with the coefficients as stored in `T`, `Σ_i H_i(e^{iω dt})` with
-    /// `H_i(z) = (p (1 - z^-1) + q) / (1 - (1 - d) z^-1)` (plus g_i for the
-    /// load forms, whose state is the relaxation). The static share
-    /// `1 - Σ g_i` is not included. f64 with libm trig: reports and tests.
+    /// at ω (rad/s), as (storage, loss): [`branch_response`] of its cells.
     pub fn branch_response(&self, omega: f64) -> (f64, f64) {
-        let theta = omega * self.dt;
-        let (c, s) = (libm::cos(theta), libm::sin(theta));
-        let mut sum = (0.0, 0.0);
-        for cell in &self.cells {
-            let (d, p, q) = (
-                cell.decay.to_f64(),
-                cell.rate_gain.to_f64(),
-                cell.level_gain.to_f64(),
-            );
-            // z^-1 = c - i s
-            let (num_re, num_im) = (p * (1.0 - c) + q, p * s);
-            let a = 1.0 - d;
-            let (den_re, den_im) = (1.0 - a * c, a * s);
-            let norm = den_re * den_re + den_im * den_im;
-            sum.0 += (num_re * den_re + num_im * den_im) / norm;
-            sum.1 += (num_im * den_re - num_re * den_im) / norm;
-            if self.form.is_load() {
-                sum.0 += cell.g.to_f64();
-            }
-        }
-        sum
+        branch_response(self.form, &self.cells, omega * self.dt)
     }
 
     /// Branch forces of a state, given the backbone force at its step.

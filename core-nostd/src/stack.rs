@@ -288,6 +288,11 @@ impl<T: Real, const M: usize> Relaxation<T> for KfTable<T, M> {
 
 /// How the model treats the first loading from the initial state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Deserialize, serde::Serialize),
+    serde(rename_all = "kebab-case")
+)]
 pub enum FirstLoading {
     /// Masing's rule: the virgin curve H(2|x - x0|)/2, and a path that
     /// leaves every loop returns to it.

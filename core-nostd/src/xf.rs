@@ -45,6 +45,11 @@ use crate::real::Real;
 
 /// Discrete form of an x_f cell.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Deserialize, serde::Serialize),
+    serde(rename_all = "kebab-case")
+)]
 pub enum XfForm {
     /// Eq 2.41: e^(-y/2) on the increment.
     Midpoint,

@@ -12,7 +12,7 @@
 //!   sees exactly the drive it sees in the scene;
 //! - for comparison (not in the sum): a scene of one effect also as the
 //!   general effect list of `model::build`, and a Maxwell effect of at
-//!   most 8 cells as the const-size [`MaxwellBank`] firmware would use.
+//!   most 8 cells as the const-size [`bushing::MaxwellBank`] firmware would use.
 //!
 //! Profiles shorter than [`CostOptions::min_steps`] are repeated to that
 //! length; each figure is the best of [`CostOptions::repetitions`]
@@ -23,7 +23,7 @@
 //! type, its loop monomorphised, so it costs what its parts cost; two or
 //! more effects run as a list, one match per effect and step. The drivers
 //! (`run`, `validate`, `cost`) dispatch once per chunk of steps, never per
-//! step. The run-time sized banks (`model::DynMaxwell`) loop over a slice
+//! step. The run-time sized banks (`family::maxwell::DynMaxwell`) loop over a slice
 //! of unknown length, which the compiler does not unroll; the const-size
 //! line shows what firmware pays for the same cells (about half).
 //!
@@ -31,19 +31,18 @@
 //! [`callgrind`] harness that the accuracy-cost report uses too.
 
 pub mod callgrind;
+pub mod timer;
 
 use std::fmt;
 use std::hint::black_box;
 use std::path::Path;
-use std::time::Duration;
 
-use bushing::{
-    Accumulator, Backbone, Bushing, Compensated, Effect, MaxwellBank, MaxwellForm, MaxwellSpec,
-    Multiplied, ParamError, Plain, Real,
-};
+use bushing::{ParamError, Real};
 
-use crate::model::{self, AnyBackbone, SceneBushing, Shape};
-use crate::scene::{BackboneSpec, Effect as EffectDesc, NumberType, Scene, SceneError, Storage};
+use crate::family::Effect as EffectDesc;
+use crate::model::{self, SceneBushing, Shape};
+use crate::scene::{BackboneSpec, NumberType, Scene, SceneError};
+use timer::{STEPPING, Timer, per_step, timer};
 
 /// Why a scene could not be costed.
 #[derive(Debug, thiserror::Error)]
@@ -285,78 +284,19 @@ pub fn run_part_of(scene_file: &Path, part: usize, steps: usize) -> Result<(), E
     run_part(&Scene::load(scene_file)?, part, steps)
 }
 
-/// Name of the function that steps every part (for callgrind's
-/// `--toggle-collect`): [`model::stepping_pass`].
-const STEPPING: &str = "stepping_pass";
-
-/// Nanoseconds per input.
-fn per_step<T>(elapsed: Duration, inputs: &[T]) -> f64 {
-    elapsed.as_secs_f64() * 1e9 / inputs.len().max(1) as f64
-}
-
-type Timer<T> = Box<dyn Fn(&[T], T) -> f64>;
-
-fn timer<T: Real + 'static, B: Backbone<T> + 'static, E: Effect<T> + 'static>(
-    b: Bushing<T, B, E>,
-) -> Timer<T> {
-    Box::new(move |inputs, x0| per_step(model::stepping_pass(&b, inputs, x0), inputs))
-}
-
-/// The scene `scene` with `effects` only, compiled as `run` compiles it.
-fn compiled<T: Real + 'static>(scene: &Scene, effects: &[EffectDesc]) -> Result<Timer<T>, Error> {
-    let sub = Scene {
-        effects: effects.to_vec(),
-        ..scene.clone()
-    };
-    let what = match effects {
+/// The scene `scene` with the effects at `keep` only, compiled as `run`
+/// compiles it (from the models the scene built).
+fn compiled<T: Real + 'static>(scene: &Scene, keep: &[usize]) -> Result<Timer<T>, Error> {
+    let sub = scene.only(keep);
+    let what = match sub.effects() {
         [] => "the scene's backbone alone".to_string(),
-        [one] if scene.effects.len() > 1 => format!("the scene with {} only", one.name()),
+        [one] if scene.effects().len() > 1 => format!("the scene with {} only", one.name()),
         _ => "the scene".to_string(),
     };
     let model = model::compile::<T>(&sub).map_err(refused(what))?;
     Ok(Box::new(move |inputs, x0| {
         per_step(model.time_steps(inputs, x0), inputs)
     }))
-}
-
-/// The const-size Maxwell bank of `cells` (1 to 8), as firmware builds it.
-fn firmware_maxwell<T: Real + 'static>(
-    backbone: &AnyBackbone<T>,
-    form: MaxwellForm,
-    cells: &[MaxwellSpec],
-    dt: f64,
-    storage: Storage,
-) -> Option<Timer<T>> {
-    fn bank<T: Real + 'static, A: Accumulator<T> + 'static, const N: usize>(
-        backbone: &AnyBackbone<T>,
-        form: MaxwellForm,
-        cells: &[MaxwellSpec],
-        dt: f64,
-    ) -> Option<Timer<T>> {
-        let specs: &[MaxwellSpec; N] = cells.try_into().ok()?;
-        let bank = MaxwellBank::<T, N, A>::new(form, specs, dt).ok()?;
-        Bushing::new(backbone.clone(), (bank,)).ok().map(timer)
-    }
-    macro_rules! sizes {
-        ($acc:ty) => {
-            match cells.len() {
-                1 => bank::<T, $acc, 1>(backbone, form, cells, dt),
-                2 => bank::<T, $acc, 2>(backbone, form, cells, dt),
-                3 => bank::<T, $acc, 3>(backbone, form, cells, dt),
-                4 => bank::<T, $acc, 4>(backbone, form, cells, dt),
-                5 => bank::<T, $acc, 5>(backbone, form, cells, dt),
-                6 => bank::<T, $acc, 6>(backbone, form, cells, dt),
-                7 => bank::<T, $acc, 7>(backbone, form, cells, dt),
-                8 => bank::<T, $acc, 8>(backbone, form, cells, dt),
-                _ => None,
-            }
-        };
-    }
-    match storage {
-        Storage::Plain => sizes!(Plain<T>),
-        Storage::Multiplied => sizes!(Multiplied<T>),
-        Storage::Compensated => sizes!(Compensated<T>),
-    }
 }
 
 /// The profile's inputs, `min_steps` to `max_steps` of them (a short
@@ -395,11 +335,10 @@ fn plan<T: Real + 'static>(scene: &Scene) -> Result<Plan<T>, Error> {
     let shape = model::compile::<T>(scene)
         .map_err(refused("the scene"))?
         .shape();
-    let backbone =
-        model::backbone::<T>(&scene.backbone).map_err(refused("the scene's backbone"))?;
-    let mut timers: Vec<Timer<T>> = vec![compiled(scene, &scene.effects)?, compiled(scene, &[])?];
-    for effect in &scene.effects {
-        timers.push(compiled(scene, std::slice::from_ref(effect))?);
+    let all: Vec<usize> = (0..scene.effects().len()).collect();
+    let mut timers: Vec<Timer<T>> = vec![compiled(scene, &all)?, compiled(scene, &[])?];
+    for j in &all {
+        timers.push(compiled(scene, std::slice::from_ref(j))?);
     }
     let mut comparisons = Vec::new();
     if shape == Shape::One {
@@ -411,28 +350,12 @@ fn plan<T: Real + 'static>(scene: &Scene) -> Result<Plan<T>, Error> {
         ));
         timers.push(timer(list));
     }
-    for effect in &scene.effects {
-        if let EffectDesc::Maxwell {
-            form,
-            storage,
-            cells,
-        } = effect
-            && let Some(t) = firmware_maxwell(&backbone, *form, cells, scene.dt, *storage)
+    let built = scene.built::<T>().map_err(refused("the scene"))?;
+    for effect in scene.effects() {
+        if let EffectDesc::Maxwell(bank) = effect
+            && let Some((name, t)) = bank.firmware(&built.backbone, scene.dt, scene.number.name())
         {
-            comparisons.push((
-                format!(
-                    "{} as a const-size MaxwellBank<{}, {}{}>, effect only",
-                    EffectDesc::name(effect),
-                    scene.number.name(),
-                    cells.len(),
-                    match storage {
-                        Storage::Plain => "",
-                        Storage::Multiplied => ", Multiplied",
-                        Storage::Compensated => ", Compensated",
-                    }
-                ),
-                true,
-            ));
+            comparisons.push((name, true));
             timers.push(t);
         }
     }

@@ -112,7 +112,7 @@ pub fn sts_error(n: usize, placement: Placement) -> Result<f64, ParamError> {
     Ok(worst / peak)
 }
 
-type DynSliders = Bushing<f64, Polynomial<f64, 2>, (crate::model::DynIwanSliders<f64>,)>;
+type DynSliders = Bushing<f64, Polynomial<f64, 2>, (crate::family::iwan::DynIwanSliders<f64>,)>;
 
 fn bushing_sim_sliders(
     specs: &[bushing::IwanCellSpec],
@@ -120,7 +120,7 @@ fn bushing_sim_sliders(
 ) -> Result<DynSliders, ParamError> {
     Bushing::new(
         Polynomial::linear(k_ref)?,
-        (crate::model::iwan_sliders(specs, k_ref)?,),
+        (crate::family::iwan::iwan_sliders(specs, k_ref)?,),
     )
 }
 

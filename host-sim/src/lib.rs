@@ -12,11 +12,11 @@
 mod tagged;
 
 pub mod accuracy_cost;
-pub mod backbone;
 pub mod cli;
 pub mod compare;
 pub mod cost;
 pub mod csv_text;
+pub mod family;
 pub mod fit;
 pub mod fractional_report;
 pub mod iwan_report;
@@ -27,6 +27,7 @@ pub mod plot;
 pub mod powertrain;
 pub mod probe;
 pub mod profile;
+pub mod reference;
 pub mod run;
 pub mod scene;
 pub mod validate;

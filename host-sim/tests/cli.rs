@@ -101,8 +101,8 @@ fn a_scene_error_shows_its_line_with_a_caret_and_exits_2() {
         .assert()
         .code(2)
         .stderr(
-            predicate::str::contains("form 'rate-exact-rump' is not one of")
-                .and(predicate::str::contains("[[effects]]"))
+            predicate::str::contains("form: unknown variant `rate-exact-rump`, expected one of")
+                .and(predicate::str::contains("form = \"rate-exact-rump\""))
                 .and(predicate::str::contains("^^^")),
         );
     assert!(

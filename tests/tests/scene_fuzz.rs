@@ -704,7 +704,7 @@ fn execute(text: &str, dir: &Path, out: Option<&Path>) -> Result<Outcome, Panic>
         .take_while(char::is_ascii_alphanumeric)
         .collect();
     let mut features = vec![format!("profile {profile}")];
-    for e in &scene.effects {
+    for e in scene.effects() {
         let name = e.name();
         features.push(format!("effect {}", name.split(' ').next().unwrap_or("")));
     }

@@ -11,7 +11,9 @@ use std::f64::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
 
 use bushing::{Bushing, MaxwellBank, MaxwellSpec, Plain};
-use bushing_sim::model::{self, DynGrunwald};
+use bushing_sim::family::fractional::{DynGrunwald, Fractional};
+use bushing_sim::family::maxwell::Maxwell;
+use bushing_sim::model;
 use bushing_sim::scene::{Effect, NumberType};
 use bushing_sim::{Scene, run};
 
@@ -52,7 +54,7 @@ fn linear(scene: &Scene) -> f64 {
 #[test]
 fn fractional_scene_settles_on_the_discrete_cell_response() {
     let scene = Scene::load(&root().join("scenes/fractional.toml")).unwrap();
-    let Effect::Fractional { spec, taps } = scene.effects[0] else {
+    let Effect::Fractional(Fractional { spec, taps }) = scene.effects()[0] else {
         panic!("not a fractional scene");
     };
     assert_eq!((spec.alpha, taps), (0.5, 4096));
@@ -153,15 +155,16 @@ fn constant_temperature_equals_pre_shifted_corners_bit_for_bit() {
         let history = held.temperature.clone().unwrap();
         let a_t = history.shift_at(0.0).unwrap();
         assert!((a_t.log10() - 8.86 * 15.0 / (101.6 - 15.0)).abs() < 1e-12);
-        let mut shifted = held.clone();
-        shifted.temperature = None;
-        for e in &mut shifted.effects {
-            if let Effect::Maxwell { cells, .. } = e {
+        let mut effects = held.effects().to_vec();
+        for e in &mut effects {
+            if let Effect::Maxwell(Maxwell { cells, .. }) = e {
                 for c in cells {
                     c.omega /= a_t;
                 }
             }
         }
+        let mut shifted = held.with_effects(effects).unwrap();
+        shifted.temperature = None;
         let (out_a, out_b) = (out_dir("held"), out_dir("pre-shifted"));
         run::run(&held, &out_a).unwrap();
         run::run(&shifted, &out_b).unwrap();
@@ -178,7 +181,7 @@ fn constant_temperature_equals_pre_shifted_corners_bit_for_bit() {
 
         if number == NumberType::F32 {
             let rows = trace(&out_a);
-            let Effect::Maxwell { form, cells, .. } = &held.effects[0] else {
+            let Effect::Maxwell(Maxwell { form, cells, .. }) = &held.effects()[0] else {
                 panic!("not a Maxwell scene");
             };
             let specs: [MaxwellSpec; 5] = cells.clone().try_into().unwrap();
@@ -202,7 +205,7 @@ fn constant_temperature_equals_pre_shifted_corners_bit_for_bit() {
 /// The scene's Maxwell bank as the core builds it, and its modulus
 /// `K (g0 + Re H)`, `K Im H` at `f` Hz tuned to `a_t`.
 fn bank_modulus(scene: &Scene, a_t: f64, f: f64) -> (f64, f64) {
-    let Effect::Maxwell { form, cells, .. } = &scene.effects[0] else {
+    let Effect::Maxwell(Maxwell { form, cells, .. }) = &scene.effects()[0] else {
         panic!("not a Maxwell scene");
     };
     let specs: [MaxwellSpec; 5] = cells.clone().try_into().unwrap();
@@ -242,7 +245,7 @@ fn temperature_ramp_follows_the_shift_factor() {
     // The core's bank, swapped between steps.
     let rows = trace(&out);
     assert_eq!(rows.len() as u64, scene.steps());
-    let Effect::Maxwell { form, cells, .. } = &scene.effects[0] else {
+    let Effect::Maxwell(Maxwell { form, cells, .. }) = &scene.effects()[0] else {
         panic!("not a Maxwell scene");
     };
     let specs: [MaxwellSpec; 5] = cells.clone().try_into().unwrap();

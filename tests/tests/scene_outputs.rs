@@ -11,6 +11,7 @@ use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
 
 use bushing::{MaxwellBank, MaxwellSpec};
+use bushing_sim::family::maxwell::Maxwell;
 use bushing_sim::scene::Effect;
 use bushing_sim::validate::{self, Outcome};
 use bushing_sim::{Scene, cost, plot, run};
@@ -152,7 +153,7 @@ fn a_triangle_scene_writes_no_modulus() {
 /// The scene's Maxwell cells and the complex modulus of its discrete bank
 /// at `f` Hz on the linear backbone K^∞: `K^∞ (g^0 + Σ H_i)`.
 fn exact_modulus(scene: &Scene, k_inf: f64, f: f64) -> (f64, f64) {
-    let Effect::Maxwell { form, cells, .. } = &scene.effects[0] else {
+    let Effect::Maxwell(Maxwell { form, cells, .. }) = &scene.effects()[0] else {
         panic!("not a Maxwell scene");
     };
     let specs: [MaxwellSpec; 4] = cells.clone().try_into().unwrap();
@@ -438,7 +439,7 @@ fn a_one_effect_scene_is_costed_as_its_own_bushing_type_and_as_a_list() {
 /// The trace of `scene`: header and rows.
 fn trace(scene: &str) -> (Vec<String>, Vec<Vec<f64>>) {
     let scene = Scene::load(&root().join(scene)).unwrap();
-    let out = out_dir(&format!("columns-{}", scene.effects.len()));
+    let out = out_dir(&format!("columns-{}", scene.effects().len()));
     run::run(&scene, &out).unwrap();
     let text = std::fs::read_to_string(out.join("trace.csv")).unwrap();
     std::fs::remove_dir_all(&out).ok();

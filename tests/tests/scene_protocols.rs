@@ -6,6 +6,7 @@ mod common;
 
 use std::f64::consts::SQRT_2;
 
+use bushing_sim::family::xf::Xf;
 use bushing_sim::scene::{BackboneSpec, Effect};
 use bushing_sim::validate::{self, Outcome};
 use bushing_sim::{Scene, probe, run};
@@ -103,8 +104,8 @@ fn table_3_1_scenes_carry_the_identified_parameters() {
         assert!((mu0 - if material.c1 > 0.0 { 2.01 } else { 2.05 }).abs() < 5e-3);
         // The x_f cells: those of Table 3.1 with g > 0, x_f = k eps_f.
         let k = if shear { SQRT_2 } else { (2.0f64 / 3.0).sqrt() };
-        for effect in &scene.effects {
-            if let Effect::Xf { cells, .. } = effect {
+        for effect in scene.effects() {
+            if let Effect::Xf(Xf { cells, .. }) = effect {
                 let want: Vec<_> = material.cells.iter().filter(|c| c.1 > 0.0).collect();
                 assert_eq!(cells.len(), want.len(), "{stem}");
                 for (c, &&(f, g, eps)) in cells.iter().zip(&want) {

@@ -68,7 +68,7 @@ fn a_scene_with_no_effects_builds_none_and_dissipates_nothing() {
     let end = text.find("[profile]").unwrap();
     let bare = format!("{}{}", &text[..start], &text[end..]);
     let scene = Scene::parse("bare.toml", &bare).unwrap();
-    assert!(scene.effects.is_empty());
+    assert!(scene.effects().is_empty());
     let b = bushing_sim::model::build::<f64>(&scene).unwrap();
     assert!(b.effects().effects().is_empty());
     assert_eq!(b.g0(), 1.0);
@@ -83,7 +83,7 @@ fn a_scene_with_no_effects_builds_none_and_dissipates_nothing() {
 fn composite_scene_equals_the_const_generic_kernels() {
     use bushing::{IwanBank, IwanCellSpec, XfBank, XfForm, XfSpec};
     let scene = Scene::load(&root().join("scenes/hysteresis-triangle.toml")).unwrap();
-    assert_eq!(scene.effects.len(), 3);
+    assert_eq!(scene.effects().len(), 3);
     let dyn_bushing = bushing_sim::model::build::<f32>(&scene).unwrap();
     let maxwell = MaxwellBank::<f32, 3>::new(
         MaxwellForm::RateExactRamp,
@@ -130,7 +130,7 @@ fn composite_scene_equals_the_const_generic_kernels() {
 fn friction_scene_equals_the_const_generic_cells_and_stays_bounded() {
     use bushing::{Berg, BoucWen, Dahl};
     let scene = Scene::load(&root().join("scenes/friction-cells.toml")).unwrap();
-    assert_eq!(scene.effects.len(), 3);
+    assert_eq!(scene.effects().len(), 3);
     let dyn_bushing = bushing_sim::model::build::<f32>(&scene).unwrap();
     let dahl = Dahl::<f32>::new(200.0, 10.0, 1.0).unwrap();
     let bouc_wen = BoucWen::<f32>::new(20.0, 10.0, 60.0, 20.0, 8.0).unwrap();
@@ -190,13 +190,13 @@ fn compiled_equals_list<T: bushing::Real + 'static>(scene: &Scene) {
     if let Some(spec) = scene.oscillator {
         return oscillator_equals_core::<T>(scene, spec, compiled.as_mut());
     }
-    let expected = match scene.effects.len() {
+    let expected = match scene.effects().len() {
         0 => Shape::BackboneOnly,
         1 => Shape::One,
         _ => Shape::List,
     };
     assert_eq!(compiled.shape(), expected, "{}", scene.title);
-    assert_eq!(compiled.effect_count(), scene.effects.len());
+    assert_eq!(compiled.effect_count(), scene.effects().len());
     let list = model::build::<T>(scene).unwrap();
     assert_eq!(compiled.g0(), list.g0());
     let x0 = bushing_sim::profile::displacement(&scene.profile, 0.0);
@@ -215,8 +215,8 @@ fn compiled_equals_list<T: bushing::Real + 'static>(scene: &Scene) {
         compiled.step_into(chunk, &mut rows, &mut parts);
     }
     assert_eq!(rows.len(), inputs.len());
-    assert_eq!(parts.len(), inputs.len() * scene.effects.len());
-    let count = scene.effects.len();
+    assert_eq!(parts.len(), inputs.len() * scene.effects().len());
+    let count = scene.effects().len();
     for (n, (&x, row)) in inputs.iter().zip(&rows).enumerate() {
         let o = list.step(&mut state, x);
         let bits = |v: T| v.bits();
@@ -261,7 +261,7 @@ fn oscillator_equals_core<T: bushing::Real + 'static>(
     let inputs: Vec<T> = (1..=scene.steps().min(20_000)).map(force).collect();
     let (mut rows, mut parts) = (Vec::new(), Vec::new());
     compiled.step_into(&inputs, &mut rows, &mut parts);
-    assert_eq!(parts.len(), inputs.len() * scene.effects.len());
+    assert_eq!(parts.len(), inputs.len() * scene.effects().len());
     for (n, (&f, row)) in inputs.iter().zip(&rows).enumerate() {
         let o = core.step(&mut state, f);
         assert_eq!(
@@ -283,10 +283,8 @@ fn every_scene_compiled_steps_bit_for_bit_as_the_effect_list() {
         compiled_equals_list::<f64>(&scene);
         // The same scene with its first effect only, and with none.
         for keep in [1, 0] {
-            let sub = Scene {
-                effects: scene.effects.iter().take(keep).cloned().collect(),
-                ..scene.clone()
-            };
+            let first: Vec<usize> = (0..keep.min(scene.effects().len())).collect();
+            let sub = scene.only(&first);
             compiled_equals_list::<f32>(&sub);
         }
         seen += 1;

@@ -2,141 +2,17 @@
 //! scene lists are built, kept in a list in the scene's order, and a step
 //! visits only those.
 
-mod banks;
 mod oscillator;
-#[cfg(test)]
-mod tests;
 mod tuned;
 
-use bushing::{
-    Backbone, Berg, BoucWen, Bushing, BushingState, Dahl, Drive, Effect, EffectOutput, KfTable,
-    ParamError, Real, Sts, TurningPoints,
-};
+use bushing::{Bushing, BushingState, Drive, Effect, EffectOutput, ParamError, Real};
 
-pub use crate::backbone::{AnyBackbone, MAX_COEFFICIENTS, MAX_POINTS, backbone};
-use crate::scene::{Effect as EffectDesc, Friction, Law, STACK_DEPTH, Scene, TABLE_POINTS};
+pub use crate::family::backbone::{AnyBackbone, MAX_COEFFICIENTS, MAX_POINTS, backbone};
+use crate::family::{AnyEffect, AnyState, Tuned, each_effect};
+use crate::scene::Scene;
 
-pub use banks::*;
-use banks::{iwan_clamp, xf_bank};
 use oscillator::OscillatorModel;
 use tuned::shifted_bushing;
-pub use tuned::*;
-
-/// Turning-point model with the STS law.
-pub type StsStack<T> = TurningPoints<Sts<T>, STACK_DEPTH>;
-/// Turning-point model with a measured K_f table.
-pub type TableStack<T> = TurningPoints<KfTable<T, TABLE_POINTS>, STACK_DEPTH>;
-
-/// One effect a scene can name, built.
-#[derive(Debug, Clone)]
-pub enum AnyEffect<T> {
-    /// Maxwell bank.
-    Maxwell(DynMaxwell<T>),
-    /// Iwan bank, clamp form.
-    Clamp(DynIwanClamp<T>),
-    /// Iwan bank, slider form.
-    Sliders(DynIwanSliders<T>),
-    /// x_f bank.
-    Xf(DynXf<T>),
-    /// Turning-point stack, STS law.
-    Sts(StsStack<T>),
-    /// Turning-point stack, measured table.
-    Table(TableStack<T>),
-    /// Dahl cell.
-    Dahl(Dahl<T>),
-    /// Bouc-Wen cell.
-    BoucWen(BoucWen<T>),
-    /// Berg cell.
-    Berg(Berg<T>),
-    /// Grünwald fractional cell.
-    Fractional(DynGrunwald<T>),
-}
-
-/// State of one [`AnyEffect`].
-#[derive(Debug, Clone, PartialEq)]
-pub enum AnyState<T: Real> {
-    /// Maxwell bank.
-    Maxwell(<DynMaxwell<T> as Effect<T>>::State),
-    /// Iwan bank, clamp form.
-    Clamp(<DynIwanClamp<T> as Effect<T>>::State),
-    /// Iwan bank, slider form.
-    Sliders(<DynIwanSliders<T> as Effect<T>>::State),
-    /// x_f bank.
-    Xf(<DynXf<T> as Effect<T>>::State),
-    /// Turning-point stack, STS law.
-    Sts(<StsStack<T> as Effect<T>>::State),
-    /// Turning-point stack, measured table.
-    Table(<TableStack<T> as Effect<T>>::State),
-    /// Dahl cell.
-    Dahl(<Dahl<T> as Effect<T>>::State),
-    /// Bouc-Wen cell.
-    BoucWen(<BoucWen<T> as Effect<T>>::State),
-    /// Berg cell.
-    Berg(<Berg<T> as Effect<T>>::State),
-    /// Grünwald fractional cell.
-    Fractional(<DynGrunwald<T> as Effect<T>>::State),
-}
-
-/// Calls `$f` with the effect inside an [`AnyEffect`] (one arm per kind).
-macro_rules! each_effect {
-    ($e:expr, |$x:ident| $f:expr) => {
-        match $e {
-            AnyEffect::Maxwell($x) => $f,
-            AnyEffect::Clamp($x) => $f,
-            AnyEffect::Sliders($x) => $f,
-            AnyEffect::Xf($x) => $f,
-            AnyEffect::Sts($x) => $f,
-            AnyEffect::Table($x) => $f,
-            AnyEffect::Dahl($x) => $f,
-            AnyEffect::BoucWen($x) => $f,
-            AnyEffect::Berg($x) => $f,
-            AnyEffect::Fractional($x) => $f,
-        }
-    };
-}
-
-impl<T: Real> AnyEffect<T> {
-    fn fraction(&self) -> f64 {
-        each_effect!(self, |e| e.fraction())
-    }
-    fn check_dt(&self, dt: Option<f64>) -> Result<Option<f64>, ParamError> {
-        each_effect!(self, |e| e.check_dt(dt))
-    }
-    fn rest(&self, x0: T) -> AnyState<T> {
-        match self {
-            Self::Maxwell(e) => AnyState::Maxwell(e.rest(x0)),
-            Self::Clamp(e) => AnyState::Clamp(e.rest(x0)),
-            Self::Sliders(e) => AnyState::Sliders(e.rest(x0)),
-            Self::Xf(e) => AnyState::Xf(e.rest(x0)),
-            Self::Sts(e) => AnyState::Sts(e.rest(x0)),
-            Self::Table(e) => AnyState::Table(e.rest(x0)),
-            Self::Dahl(e) => AnyState::Dahl(e.rest(x0)),
-            Self::BoucWen(e) => AnyState::BoucWen(e.rest(x0)),
-            Self::Berg(e) => AnyState::Berg(e.rest(x0)),
-            Self::Fractional(e) => AnyState::Fractional(e.rest(x0)),
-        }
-    }
-    #[inline(always)]
-    fn step(&self, state: &mut AnyState<T>, drive: &Drive<T>) -> EffectOutput<T> {
-        fn go<T: Real, E: Effect<T>>(e: &E, s: &mut E::State, d: &Drive<T>) -> EffectOutput<T> {
-            E::total(&e.step(s, d))
-        }
-        match (self, state) {
-            (Self::Maxwell(e), AnyState::Maxwell(s)) => go(e, s, drive),
-            (Self::Clamp(e), AnyState::Clamp(s)) => go(e, s, drive),
-            (Self::Sliders(e), AnyState::Sliders(s)) => go(e, s, drive),
-            (Self::Xf(e), AnyState::Xf(s)) => go(e, s, drive),
-            (Self::Sts(e), AnyState::Sts(s)) => go(e, s, drive),
-            (Self::Table(e), AnyState::Table(s)) => go(e, s, drive),
-            (Self::Dahl(e), AnyState::Dahl(s)) => go(e, s, drive),
-            (Self::BoucWen(e), AnyState::BoucWen(s)) => go(e, s, drive),
-            (Self::Berg(e), AnyState::Berg(s)) => go(e, s, drive),
-            (Self::Fractional(e), AnyState::Fractional(s)) => go(e, s, drive),
-            // A state always comes from its own effect's `rest`.
-            _ => EffectOutput::zero(),
-        }
-    }
-}
 
 /// The effects a scene lists, in its order, and only those: one step
 /// visits each present effect once (no slot for an absent one).
@@ -197,30 +73,6 @@ pub struct Slot<T: Real> {
 impl<T: Real> PartialEq for Slot<T> {
     fn eq(&self, other: &Self) -> bool {
         self.state == other.state && self.last == other.last
-    }
-}
-
-impl<T: Real> AnyState<T> {
-    /// Makes `self` equal to `src`, reusing `self`'s storage when both are
-    /// of the same kind (no allocation in a running list).
-    fn copy_from(&mut self, src: &Self) {
-        match (self, src) {
-            (Self::Maxwell(d), Self::Maxwell(s)) => match (d, s) {
-                (DynMaxwellState::Plain(d), DynMaxwellState::Plain(s)) => d.clone_from(s),
-                (DynMaxwellState::Multiplied(d), DynMaxwellState::Multiplied(s)) => d.clone_from(s),
-                (DynMaxwellState::Compensated(d), DynMaxwellState::Compensated(s)) => {
-                    d.clone_from(s)
-                }
-                (d, s) => d.clone_from(s),
-            },
-            (Self::Clamp(d), Self::Clamp(s)) => {
-                d.0.clone_from(&s.0);
-                d.1 = s.1;
-            }
-            (Self::Sliders(d), Self::Sliders(s)) | (Self::Xf(d), Self::Xf(s)) => d.clone_from(s),
-            (Self::Fractional(d), Self::Fractional(s)) => d.clone_from(s),
-            (d, s) => d.clone_from(s),
-        }
     }
 }
 
@@ -290,53 +142,26 @@ pub type SceneBushing<T> = Bushing<T, AnyBackbone<T>, SceneEffects<T>>;
 /// State of a [`SceneBushing`].
 pub type SceneState<T> = BushingState<T, <SceneEffects<T> as Effect<T>>::State>;
 
-/// Builds the bushing a scene describes, with only its effects.
-pub fn build<T: Real>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
-    let mut effects = Vec::with_capacity(scene.effects.len());
-    for e in &scene.effects {
-        effects.push(match e {
-            EffectDesc::Maxwell {
-                form,
-                storage,
-                cells,
-            } => AnyEffect::Maxwell(DynMaxwell::new(*form, cells, scene.dt, *storage)?),
-            EffectDesc::Iwan {
-                slider: false,
-                cells,
-                ..
-            } => AnyEffect::Clamp(iwan_clamp(cells)?),
-            EffectDesc::Iwan {
-                slider: true,
-                k_ref,
-                cells,
-            } => AnyEffect::Sliders(iwan_sliders(cells, *k_ref)?),
-            EffectDesc::Xf { form, cells } => AnyEffect::Xf(xf_bank(*form, cells, scene.dt)?),
-            EffectDesc::TurningPoints { law, first_loading } => match law {
-                Law::Sts { c, k1 } => {
-                    AnyEffect::Sts(TurningPoints::new(Sts::new(*c, *k1)?, *first_loading))
-                }
-                Law::Table { d, k } => {
-                    AnyEffect::Table(TurningPoints::new(KfTable::new(d, k)?, *first_loading))
-                }
-            },
-            EffectDesc::Friction(Friction::Dahl(p)) => {
-                AnyEffect::Dahl(Dahl::new(p.k_d, p.f_f, p.alpha)?)
-            }
-            EffectDesc::Friction(Friction::BoucWen(p)) => {
-                AnyEffect::BoucWen(BoucWen::new(p.alpha, p.a, p.beta, p.gamma, p.n)?)
-            }
-            EffectDesc::Friction(Friction::Berg(p)) => AnyEffect::Berg(Berg::new(p.f_max, p.x2)?),
-            EffectDesc::Fractional { spec, taps } => {
-                AnyEffect::Fractional(DynGrunwald::new(*spec, *taps, scene.dt)?)
-            }
-        });
-    }
-    Bushing::new(backbone(&scene.backbone)?, EffectList { effects })
+/// The bushing a scene describes, with only its effects: the models the
+/// scene built when it was read (built now when `T` is not the scene's
+/// working type).
+pub fn build<T: Real + 'static>(scene: &Scene) -> Result<SceneBushing<T>, ParamError> {
+    let built = scene.built::<T>()?.into_owned();
+    Bushing::new(
+        built.backbone,
+        EffectList {
+            effects: built.effects,
+        },
+    )
 }
 
 /// Names of the effects present, in trace-column order.
 pub fn effect_names(scene: &Scene) -> Vec<String> {
-    scene.effects.iter().map(EffectDesc::name).collect()
+    scene
+        .effects()
+        .iter()
+        .map(crate::family::Effect::name)
+        .collect()
 }
 
 /// Per-effect forces and energies of the last step, in trace-column order
@@ -501,7 +326,7 @@ impl<T: Real, E: Parts<T>> SceneModel<T> for Compiled<T, E> {
         }
     }
     fn time_steps(&self, inputs: &[T], x0: T) -> std::time::Duration {
-        stepping_pass(&self.bushing, inputs, x0)
+        crate::cost::timer::stepping_pass(&self.bushing, inputs, x0)
     }
     fn retune(&mut self, a_t: f64) -> Result<(), ParamError> {
         if a_t != self.shift {
@@ -510,25 +335,6 @@ impl<T: Real, E: Parts<T>> SceneModel<T> for Compiled<T, E> {
         }
         Ok(())
     }
-}
-
-/// Steps `bushing` from rest at `x0` through `inputs`, reading force,
-/// tangent and dissipated energy as a control loop does, and returns the
-/// wall-clock time of the steps. Never inlined, so that an instruction
-/// counter can select it by name (`cost --instructions`).
-#[inline(never)]
-pub fn stepping_pass<T: Real, B: Backbone<T>, E: Effect<T>>(
-    bushing: &Bushing<T, B, E>,
-    inputs: &[T],
-    x0: T,
-) -> std::time::Duration {
-    let mut state = bushing.state_at(x0);
-    let start = std::time::Instant::now();
-    for &x in inputs {
-        let o = bushing.step(&mut state, x);
-        std::hint::black_box((o.force, o.tangent, o.dissipated));
-    }
-    start.elapsed()
 }
 
 fn compiled<T: Real + 'static, E: Parts<T> + 'static>(

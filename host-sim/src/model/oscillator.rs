@@ -2,7 +2,7 @@
 
 use bushing::{Backbone, EffectOutput, Oscillator, OscillatorState, ParamError, Real};
 
-pub use crate::backbone::AnyBackbone;
+pub use crate::family::backbone::AnyBackbone;
 
 use super::*;
 

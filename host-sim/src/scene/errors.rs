@@ -9,8 +9,8 @@ use serde::de::{self, DeserializeSeed, Visitor};
 use toml::Spanned;
 use toml::de::{DeTable, DeValue, ValueDeserializer};
 
-use super::spec::EffectByTag;
-use crate::backbone::BackboneByTag;
+use crate::family::EffectByTag;
+use crate::family::backbone::BackboneByTag;
 use crate::profile::ProfileByTag;
 
 /// Where in a file something went wrong: 1-based line and column.
@@ -162,10 +162,12 @@ fn tagged_mistake(doc: &DeTable<'_>, span: &Range<usize>, message: &str) -> Opti
         if again.message().trim() != message {
             return None;
         }
-        let unknown =
-            message.starts_with("unknown field") || message.starts_with("unknown variant");
+        // An unknown field, or the table's own `type`, is shown at the
+        // table; an unknown name in a value (a `form`) at the value.
+        let at_table = message.starts_with("unknown field")
+            || message.starts_with(&format!("unknown variant `{tag}`"));
         return Some(match again.span() {
-            Some(at) if !unknown => at,
+            Some(at) if !at_table => at,
             _ => table.span(),
         });
     }

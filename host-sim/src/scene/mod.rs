@@ -6,27 +6,26 @@
 //! (parameter errors name the effect, the parameter and the bound, at the
 //! line of the effect's table).
 
-mod check;
 mod errors;
 mod spec;
+mod temperature;
 #[cfg(test)]
 mod tests;
 
+use std::borrow::Cow;
 use std::ops::Range;
 use std::path::Path;
 
-use bushing::{
-    Backbone, FirstLoading, FractionalSpec, IwanCellSpec, MaxwellForm, MaxwellSpec, ParamError,
-    ShiftFactor, XfForm, XfSpec,
-};
+use bushing::{Backbone, ParamError, Real, ShiftFactor};
 
-pub use crate::backbone::BackboneSpec;
+pub use crate::family::backbone::BackboneSpec;
+pub use crate::family::{Built, Effect, EffectSpec, MAX_CELLS, Models, Setting};
 pub use crate::profile::ProfileSpec;
 pub use errors::{Location, SceneError};
 pub use spec::*;
 
-use check::{validate_effect, validate_temperature};
 use errors::shape_error;
+use temperature::validate_temperature;
 
 /// Most bytes of a scene file: scenes are a page of TOML, and a larger
 /// file is refused before it is read.
@@ -42,8 +41,8 @@ pub struct LoadOptions {
     pub confine: bool,
 }
 
-/// A scene read and checked: every value is in range and every model can
-/// be built (the models themselves are built by the `model` module).
+/// A scene read and checked: every value is in range, and every model is
+/// built, once, in the working type (a run clones the built models).
 #[derive(Debug, Clone)]
 pub struct Scene {
     /// Title.
@@ -54,8 +53,11 @@ pub struct Scene {
     pub number: NumberType,
     /// Backbone.
     pub backbone: BackboneSpec,
-    /// Effects, validated.
-    pub effects: Vec<Effect>,
+    /// Effects, checked (read them with [`Scene::effects`]; the built
+    /// models follow them).
+    effects: Vec<Effect>,
+    /// The backbone and effects built in `number`.
+    models: Models,
     /// Profile.
     pub profile: ProfileSpec,
     /// Steps between two rows of `trace.csv` (1: every step).
@@ -111,163 +113,6 @@ impl Temperature {
     }
 }
 
-/// Memory lengths N a scene's fractional cell may have: the core's
-/// `Grunwald<T, N>` is sized at compile time, so a scene picks one of
-/// these (each a cell of its own, see [`crate::model::DynGrunwald`]).
-pub const FRACTIONAL_TAPS: [usize; 5] = [16, 64, 256, 1024, 4096];
-
-/// How the cells of a Maxwell bank store their state (the core's
-/// accumulators).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Storage {
-    /// `F - d F`, one word ([`bushing::Plain`]): slow cells keep their rate.
-    Plain,
-    /// `e^-h F`, one word ([`bushing::Multiplied`]): for cells not slow.
-    Multiplied,
-    /// Fast2Sum, two words ([`bushing::Compensated`]): slow cells in f32.
-    Compensated,
-}
-
-impl Storage {
-    /// Parses the scene's `state` value.
-    pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "plain" => Some(Self::Plain),
-            "multiplied" => Some(Self::Multiplied),
-            "compensated" => Some(Self::Compensated),
-            _ => None,
-        }
-    }
-
-    /// The scene's name of the storage.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Plain => "plain",
-            Self::Multiplied => "multiplied",
-            Self::Compensated => "compensated",
-        }
-    }
-}
-
-/// A validated effect.
-#[derive(Debug, Clone)]
-pub enum Effect {
-    /// A Maxwell bank.
-    Maxwell {
-        /// Form.
-        form: MaxwellForm,
-        /// How each cell stores its state.
-        storage: Storage,
-        /// Cells (ω in rad/s).
-        cells: Vec<MaxwellSpec>,
-    },
-    /// An Iwan bank.
-    Iwan {
-        /// Slider form (else clamp form).
-        slider: bool,
-        /// Reference stiffness (N/mm).
-        k_ref: f64,
-        /// Cells.
-        cells: Vec<IwanCellSpec>,
-    },
-    /// A turning-point stack model.
-    TurningPoints {
-        /// The law.
-        law: Law,
-        /// First loading rule.
-        first_loading: FirstLoading,
-    },
-    /// An x_f bank.
-    Xf {
-        /// Form.
-        form: XfForm,
-        /// Cells (ω in rad/s).
-        cells: Vec<XfSpec>,
-    },
-    /// A single friction cell.
-    Friction(Friction),
-    /// A Grünwald fractional cell.
-    Fractional {
-        /// ω_c (rad/s), α and g.
-        spec: FractionalSpec,
-        /// Memory length N, one of [`FRACTIONAL_TAPS`].
-        taps: usize,
-    },
-}
-
-/// A validated single friction cell (parameters in f64; the model is built
-/// in the run's number type).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Friction {
-    /// Dahl (eq 1.43).
-    Dahl(DahlParams),
-    /// Bouc-Wen (eq 1.44).
-    BoucWen(BoucWenParams),
-    /// Berg (eq 1.45).
-    Berg(BergParams),
-}
-
-impl Effect {
-    /// Name for reports and trace columns.
-    pub fn name(&self) -> String {
-        match self {
-            Self::Maxwell { form, cells, .. } => {
-                format!("maxwell {} x{}", form.name(), cells.len())
-            }
-            Self::Iwan { slider, cells, .. } => {
-                let form = if *slider { "slider" } else { "clamp" };
-                format!("iwan {form} x{}", cells.len())
-            }
-            Self::TurningPoints { law, .. } => match law {
-                Law::Sts { .. } => "turning-points sts".into(),
-                Law::Table { d, .. } => format!("turning-points table x{}", d.len()),
-            },
-            Self::Xf { form, cells } => format!("xf {} x{}", form.name(), cells.len()),
-            Self::Friction(Friction::Dahl(p)) => format!("dahl alpha={}", p.alpha),
-            Self::Friction(Friction::BoucWen(p)) => format!("bouc-wen n={}", p.n),
-            Self::Friction(Friction::Berg(_)) => "berg".into(),
-            Self::Fractional { spec, taps } => format!("fractional alpha {} x{taps}", spec.alpha),
-        }
-    }
-
-    /// Sum of the load fractions of the effect's cells.
-    pub fn fraction(&self) -> f64 {
-        match self {
-            Self::Maxwell { cells, .. } => cells.iter().map(|c| c.g).sum(),
-            Self::Iwan { cells, .. } => cells.iter().map(|c| c.g).sum(),
-            Self::Xf { cells, .. } => cells.iter().map(|c| c.g).sum(),
-            Self::Fractional { spec, .. } => spec.g,
-            Self::TurningPoints { .. } | Self::Friction(_) => 0.0,
-        }
-    }
-}
-
-/// A hysteretic relaxation law, validated.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Law {
-    /// Continuous STS.
-    Sts {
-        /// C in N²/mm.
-        c: f64,
-        /// K_1 in N/mm.
-        k1: f64,
-    },
-    /// Measured K_f(d).
-    Table {
-        /// Distances, mm.
-        d: Vec<f64>,
-        /// K_f, N/mm.
-        k: Vec<f64>,
-    },
-}
-
-/// Turning points a scene's stack model holds.
-pub const STACK_DEPTH: usize = 32;
-/// Points a scene's K_f table may hold.
-pub const TABLE_POINTS: usize = 64;
-
-/// Largest bank a scene may ask for.
-pub const MAX_CELLS: usize = 64;
 /// Largest number of steps a scene may ask for.
 pub const MAX_STEPS: u64 = 2_000_000_000;
 
@@ -397,45 +242,28 @@ impl Scene {
 
         let bb_span = raw.backbone.span();
         let backbone = raw.backbone.into_inner();
-        // The reference stiffness of Iwan cells given by slip distance.
-        let k_at_rest = crate::backbone::backbone::<f64>(&backbone)
-            .map_err(|e| err(Some(bb_span.clone()), format!("backbone: {e}")))?
-            .eval(0.0)
-            .1;
-        // The same checks in the working type, where a value valid in f64
-        // may overflow or vanish.
-        if run.number == NumberType::F32 {
-            crate::backbone::backbone::<f32>(&backbone)
-                .map_err(|e| err(Some(bb_span.clone()), format!("backbone (f32): {e}")))?;
-        }
-
-        let mut effects = Vec::new();
-        let mut seen = Vec::new();
-        for (i, spanned) in raw.effects.into_iter().enumerate() {
-            let span = spanned.span();
-            let spec = spanned.into_inner();
-            let kind = spec.kind();
-            if seen.contains(&kind) {
-                return Err(err(
-                    Some(span),
-                    format!(
-                        "effects[{i}]: a second '{kind}' effect; put all its cells in one table"
-                    ),
-                ));
+        let in_f64 = crate::family::backbone::backbone::<f64>(&backbone)
+            .map_err(|e| err(Some(bb_span.clone()), format!("backbone: {e}")))?;
+        let setting = Setting {
+            dt,
+            // The reference stiffness of Iwan cells given by slip distance.
+            k_at_rest: in_f64.eval(0.0).1,
+        };
+        let (raw_effects, raw_temperature) = (raw.effects, raw.temperature);
+        let (effects, models, temperature) = match run.number {
+            NumberType::F32 => {
+                // The backbone's checks in the working type, where a value
+                // valid in f64 may overflow or vanish.
+                let backbone = crate::family::backbone::backbone::<f32>(&backbone)
+                    .map_err(|e| err(Some(bb_span.clone()), format!("backbone (f32): {e}")))?;
+                let (e, b, t) = checked(backbone, raw_effects, raw_temperature, &setting, &err)?;
+                (e, Models::F32(b), t)
             }
-            seen.push(kind);
-            let checked = match run.number {
-                NumberType::F32 => validate_effect::<f32>(spec, dt, k_at_rest),
-                NumberType::F64 => validate_effect::<f64>(spec, dt, k_at_rest),
-            };
-            let effect = checked
-                .map_err(|m| err(Some(span.clone()), format!("effects[{i}] ({kind}): {m}")))?;
-            effects.push(effect);
-        }
-        let sum: f64 = effects.iter().map(Effect::fraction).sum();
-        if sum > 1.0 + 1e-12 {
-            return Err(err(None, ParamError::FractionsAboveOne { sum }.to_string()));
-        }
+            NumberType::F64 => {
+                let (e, b, t) = checked(in_f64, raw_effects, raw_temperature, &setting, &err)?;
+                (e, Models::F64(b), t)
+            }
+        };
 
         let pr_span = raw.profile.span();
         let profile = crate::profile::resolve(raw.profile.into_inner(), dir, options.confine)
@@ -513,28 +341,81 @@ impl Scene {
                 })
             }
         };
-        let temperature = match raw.temperature {
-            None => None,
-            Some(t) => {
-                let span = t.span();
-                let checked = match run.number {
-                    NumberType::F32 => validate_temperature::<f32>(t.into_inner(), &effects, dt),
-                    NumberType::F64 => validate_temperature::<f64>(t.into_inner(), &effects, dt),
-                };
-                Some(checked.map_err(|m| err(Some(span), format!("temperature{m}")))?)
-            }
-        };
         Ok(Self {
             title: raw.title,
             dt,
             number: run.number,
             backbone,
             effects,
+            models,
             profile,
             trace_every,
             oscillator,
             adc,
             temperature,
+        })
+    }
+
+    /// The effects, checked, in the scene's order.
+    pub fn effects(&self) -> &[Effect] {
+        &self.effects
+    }
+
+    /// The backbone and effects as built in `T`: the scene's own models
+    /// when `T` is its working type, else built now from the same checked
+    /// parameters.
+    pub fn built<T: Real + 'static>(&self) -> Result<Cow<'_, Built<T>>, ParamError> {
+        if let Some(built) = self.models.get::<T>() {
+            return Ok(Cow::Borrowed(built));
+        }
+        Ok(Cow::Owned(Built {
+            backbone: crate::family::backbone::backbone::<T>(&self.backbone)?,
+            effects: self
+                .effects
+                .iter()
+                .map(|e| e.build::<T>(self.dt))
+                .collect::<Result<_, _>>()?,
+        }))
+    }
+
+    /// The same scene with only the effects at `keep` (indices into
+    /// [`Scene::effects`], in that order), their models as built.
+    pub fn only(&self, keep: &[usize]) -> Self {
+        Self {
+            effects: keep
+                .iter()
+                .filter_map(|&i| self.effects.get(i).cloned())
+                .collect(),
+            models: self.models.only(keep),
+            ..self.clone()
+        }
+    }
+
+    /// The same scene with `effects` instead of its own, built in its
+    /// working type (the scene's checks of a table are not run again: the
+    /// core's constructors are).
+    pub fn with_effects(&self, effects: Vec<Effect>) -> Result<Self, ParamError> {
+        fn build<T: Real>(
+            effects: &[Effect],
+            backbone: &crate::family::backbone::AnyBackbone<T>,
+            dt: f64,
+        ) -> Result<Built<T>, ParamError> {
+            Ok(Built {
+                backbone: backbone.clone(),
+                effects: effects
+                    .iter()
+                    .map(|e| e.build::<T>(dt))
+                    .collect::<Result<_, _>>()?,
+            })
+        }
+        let models = match &self.models {
+            Models::F32(b) => Models::F32(build(&effects, &b.backbone, self.dt)?),
+            Models::F64(b) => Models::F64(build(&effects, &b.backbone, self.dt)?),
+        };
+        Ok(Self {
+            effects,
+            models,
+            ..self.clone()
         })
     }
 
@@ -553,4 +434,53 @@ impl Scene {
             None => x,
         }
     }
+}
+
+/// The effects (and the temperature history that re-tunes them) checked
+/// and built in `T` on `backbone`; `err` places a message at a span.
+#[allow(clippy::type_complexity)]
+fn checked<T: Real>(
+    backbone: crate::family::backbone::AnyBackbone<T>,
+    raw: Vec<toml::Spanned<EffectSpec>>,
+    temperature: Option<toml::Spanned<TemperatureSpec>>,
+    setting: &Setting,
+    err: &dyn Fn(Option<Range<usize>>, String) -> SceneError,
+) -> Result<(Vec<Effect>, Built<T>, Option<Temperature>), SceneError> {
+    let mut effects = Vec::with_capacity(raw.len());
+    let mut built = Vec::with_capacity(raw.len());
+    let mut seen = Vec::new();
+    for (i, spanned) in raw.into_iter().enumerate() {
+        let span = spanned.span();
+        let spec = spanned.into_inner();
+        let kind = spec.kind();
+        if seen.contains(&kind) {
+            return Err(err(
+                Some(span),
+                format!("effects[{i}]: a second '{kind}' effect; put all its cells in one table"),
+            ));
+        }
+        seen.push(kind);
+        let (effect, model) = spec
+            .check::<T>(setting)
+            .map_err(|m| err(Some(span.clone()), format!("effects[{i}] ({kind}): {m}")))?;
+        effects.push(effect);
+        built.push(model);
+    }
+    let sum: f64 = effects.iter().map(Effect::fraction).sum();
+    if sum > 1.0 + 1e-12 {
+        return Err(err(None, ParamError::FractionsAboveOne { sum }.to_string()));
+    }
+    let temperature = match temperature {
+        None => None,
+        Some(t) => {
+            let span = t.span();
+            let checked = validate_temperature::<T>(t.into_inner(), &built);
+            Some(checked.map_err(|m| err(Some(span), format!("temperature{m}")))?)
+        }
+    };
+    let built = Built {
+        backbone,
+        effects: built,
+    };
+    Ok((effects, built, temperature))
 }

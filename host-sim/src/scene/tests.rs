@@ -1,4 +1,7 @@
 use super::*;
+use crate::family::fractional::{FRACTIONAL_TAPS, Fractional};
+use crate::family::iwan::{Iwan, IwanForm};
+use bushing::IwanCellSpec;
 
 const GOOD: &str = r#"
 title = "t"
@@ -26,7 +29,7 @@ fn a_good_scene_parses() {
     assert_eq!(s.dt, 1e-3);
     assert_eq!(s.number, NumberType::F64);
     assert_eq!(s.steps(), 1500);
-    assert_eq!(s.effects.len(), 1);
+    assert_eq!(s.effects().len(), 1);
 }
 
 #[test]
@@ -55,11 +58,11 @@ fn bad_parameters_name_effect_parameter_and_bound() {
     let e = Scene::parse("s.toml", &bad).unwrap_err();
     assert!(
         e.message.contains("effects[0] (maxwell)")
-            && e.message.contains("cells[0].f_hz must be finite and > 0"),
+            && e.message.contains("cells[0]: f_hz must be > 0 (got -1)"),
         "{e}"
     );
-    // The effect's [[effects]] header.
-    assert_eq!(e.at.map(|l| l.line), Some(10), "{e}");
+    // The cell itself, on the `cells` line.
+    assert_eq!(e.at.map(|l| (l.line, l.column)), Some((13, 10)), "{e}");
     let bad = GOOD
         .replace("rate-exact-ramp", "rate-explicit")
         .replace("f_hz = 1.0", "f_hz = 200.0");
@@ -69,10 +72,10 @@ fn bad_parameters_name_effect_parameter_and_bound() {
     let e = Scene::parse("s.toml", &bad).unwrap_err();
     assert!(
         e.message
-            .contains("effects[0] (maxwell): cells[0].g = 1.5 must be in (0, 1]"),
+            .contains("effects[0] (maxwell): cells[0]: g = 1.5 must be in (0, 1]"),
         "{e}"
     );
-    assert_eq!(e.at.map(|l| l.line), Some(10), "{e}");
+    assert_eq!(e.at.map(|l| l.line), Some(13), "{e}");
     let bad = GOOD.replace(
         "coefficients = [0.0, 100.0]",
         "coefficients = [0.0, -100.0]",
@@ -89,13 +92,9 @@ fn iwan_cells_take_a_slip_force_or_a_distance_on_k_ref() {
         "[[effects]]\ntype = \"iwan\"\nform = \"clamp\"\ncells = [{ g = 0.1, x_f = 0.5 }, { g = 0.2, slip_force = 7.0 }]\n[profile]",
     );
     let s = Scene::parse("s.toml", &iwan).unwrap();
-    match &s.effects[1] {
-        Effect::Iwan {
-            slider,
-            k_ref,
-            cells,
-        } => {
-            assert!(!slider);
+    match &s.effects()[1] {
+        Effect::Iwan(Iwan { form, k_ref, cells }) => {
+            assert_eq!(*form, IwanForm::Clamp);
             assert_eq!(*k_ref, 100.0); // backbone tangent at 0
             assert_eq!(cells[0], IwanCellSpec::new(0.1, 0.1 * 100.0 * 0.5));
             assert_eq!(cells[1], IwanCellSpec::new(0.2, 7.0));
@@ -117,7 +116,7 @@ fn iwan_cells_take_a_slip_force_or_a_distance_on_k_ref() {
         Scene::parse("s.toml", &bad_form)
             .unwrap_err()
             .message
-            .contains("not one of clamp, slider")
+            .contains("form: unknown variant `stick`, expected `clamp` or `slider`")
     );
     let too_much = iwan.replace("g = 0.2, slip_force", "g = 0.75, slip_force");
     assert!(
@@ -135,11 +134,12 @@ fn xf_cells_are_checked() {
         "[[effects]]\ntype = \"xf\"\nform = \"exact-ramp\"\ncells = [{ f_hz = 0.0, g = 0.1, x_f = 0.02 }]\n[profile]",
     );
     let s = Scene::parse("s.toml", &xf).unwrap();
-    assert_eq!(s.effects[1].name(), "xf exact-ramp x1");
+    assert_eq!(s.effects()[1].name(), "xf exact-ramp x1");
     let bad = xf.replace("x_f = 0.02", "x_f = -0.02");
     let e = Scene::parse("s.toml", &bad).unwrap_err();
     assert!(
-        e.message.contains("effects[1] (xf): x_f[0] must be > 0"),
+        e.message
+            .contains("effects[1] (xf): cells[0]: x_f must be > 0"),
         "{e}"
     );
     let twice = GOOD.replace(
@@ -162,10 +162,14 @@ fn friction_cells_are_checked() {
          [[effects]]\ntype = \"berg\"\nf_max = 12.0\nx2 = 0.05\n[profile]",
     );
     let s = Scene::parse("s.toml", &cells).unwrap();
-    let names: Vec<_> = s.effects.iter().map(Effect::name).collect();
+    let names: Vec<_> = s.effects().iter().map(Effect::name).collect();
     assert_eq!(names[1..], ["dahl alpha=1", "bouc-wen n=8", "berg"]);
     assert_eq!(
-        s.effects.iter().skip(1).map(Effect::fraction).sum::<f64>(),
+        s.effects()
+            .iter()
+            .skip(1)
+            .map(Effect::fraction)
+            .sum::<f64>(),
         0.0
     );
     let bad = cells.replace("gamma = 20.0", "gamma = 70.0");
@@ -191,8 +195,8 @@ fn turning_point_laws_are_checked() {
         "[[effects]]\ntype = \"turning-points\"\nlaw = \"sts\"\nc = 400.0\nk1 = 300.0\n[profile]",
     );
     let s = Scene::parse("s.toml", &sts).unwrap();
-    assert_eq!(s.effects[1].name(), "turning-points sts");
-    assert_eq!(s.effects[1].fraction(), 0.0);
+    assert_eq!(s.effects()[1].name(), "turning-points sts");
+    assert_eq!(s.effects()[1].fraction(), 0.0);
     let missing = sts.replace("k1 = 300.0\n", "");
     let e = Scene::parse("s.toml", &missing).unwrap_err();
     assert!(
@@ -215,7 +219,7 @@ fn turning_point_laws_are_checked() {
         Scene::parse("s.toml", &first)
             .unwrap_err()
             .message
-            .contains("not one of masing, ignored")
+            .contains("first_loading: unknown variant `later`, expected `masing` or `ignored`")
     );
 }
 
@@ -567,13 +571,16 @@ fn a_fractional_effect_parses_with_its_menu_of_memory_lengths() {
     };
     for taps in FRACTIONAL_TAPS {
         let s = Scene::parse("f.toml", &frac(&taps.to_string(), "0.5")).unwrap();
-        let Effect::Fractional { spec, taps: n } = &s.effects[0] else {
-            panic!("{:?}", s.effects[0]);
+        let Effect::Fractional(Fractional { spec, taps: n }) = &s.effects()[0] else {
+            panic!("{:?}", s.effects()[0]);
         };
         assert_eq!((spec.alpha, spec.g, *n), (0.5, 0.4, taps));
         assert!((spec.omega_c - std::f64::consts::TAU * 2.0).abs() < 1e-12);
-        assert_eq!(s.effects[0].name(), format!("fractional alpha 0.5 x{taps}"));
-        assert_eq!(s.effects[0].fraction(), 0.4);
+        assert_eq!(
+            s.effects()[0].name(),
+            format!("fractional alpha 0.5 x{taps}")
+        );
+        assert_eq!(s.effects()[0].fraction(), 0.4);
     }
     for (taps, alpha, message) in [
         ("0", "0.5", "taps = 0 is not one of 16, 64, 256, 1024, 4096"),
