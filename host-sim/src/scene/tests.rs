@@ -32,6 +32,55 @@ fn a_good_scene_parses() {
     assert_eq!(s.effects().len(), 1);
 }
 
+/// The models are built once, when the scene is read, in its working
+/// type: reading them back in that type borrows them, another type builds
+/// a copy from the same checked parameters; `only` keeps the built models
+/// of the effects it keeps, and `with_effects` builds the new ones.
+#[test]
+fn a_scene_builds_its_models_once_in_its_working_type() {
+    let two = GOOD.replace(
+        "[profile]",
+        "[[effects]]\ntype = \"dahl\"\nk_d = 200.0\nf_f = 10.0\n[profile]",
+    );
+    let s = Scene::parse("s.toml", &two).unwrap();
+    assert!(matches!(s.built::<f64>().unwrap(), Cow::Borrowed(_)));
+    let other = s.built::<f32>().unwrap();
+    assert!(matches!(other, Cow::Owned(_)));
+    assert_eq!(other.effects.len(), 2);
+
+    let dahl = s.only(&[1]);
+    assert_eq!(dahl.effects(), &s.effects()[1..]);
+    let built = dahl.built::<f64>().unwrap();
+    assert!(matches!(built, Cow::Borrowed(_)));
+    assert!(matches!(
+        built.effects[..],
+        [crate::family::AnyEffect::Dahl(_)]
+    ));
+    assert!(s.only(&[]).built::<f64>().unwrap().effects.is_empty());
+
+    // A changed cell is built again, and a bad one is refused.
+    let mut effects = s.effects().to_vec();
+    let Effect::Maxwell(bank) = &mut effects[0] else {
+        panic!("{:?}", effects[0]);
+    };
+    bank.cells[0].omega *= 2.0;
+    let changed = s.with_effects(effects.clone()).unwrap();
+    assert_eq!(changed.effects(), &effects[..]);
+    let response = |scene: &Scene| match &scene.built::<f64>().unwrap().effects[0] {
+        crate::family::AnyEffect::Maxwell(b) => b.branch_response(10.0),
+        other => panic!("{other:?}"),
+    };
+    assert_ne!(response(&changed), response(&s));
+    let Effect::Maxwell(bank) = &mut effects[0] else {
+        unreachable!()
+    };
+    bank.cells[0].g = -1.0;
+    assert!(matches!(
+        s.with_effects(effects),
+        Err(ParamError::NotPositive { .. })
+    ));
+}
+
 #[test]
 fn syntax_errors_carry_line_and_column() {
     let bad = GOOD.replace("rate_hz = 1000", "rate_hz = = 1000");
