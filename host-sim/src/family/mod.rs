@@ -12,6 +12,7 @@
 //! | [`turning_points`] | `turning-points` | [`turning_points::StsStack`], [`turning_points::TableStack`] |
 //! | [`xf`] | `xf` | [`xf::DynXf`] |
 //! | [`friction`] | `dahl`, `bouc-wen`, `berg` | the core's cells |
+//! | [`dashpot`] | `dashpot` | the core's `Dashpot` |
 //! | [`fractional`] | `fractional` | [`fractional::DynGrunwald`] |
 //! | [`backbone`] | `[backbone]` | [`backbone::AnyBackbone`] |
 //!
@@ -20,6 +21,7 @@
 
 pub mod backbone;
 mod bank;
+pub mod dashpot;
 pub mod fractional;
 pub mod friction;
 pub mod iwan;
@@ -29,7 +31,7 @@ pub mod xf;
 
 use std::any::Any;
 
-use bushing::{Berg, BoucWen, Dahl, Drive, Effect as _, EffectOutput, ParamError, Real};
+use bushing::{Berg, BoucWen, Dahl, Dashpot, Drive, Effect as _, EffectOutput, ParamError, Real};
 use serde::Deserialize;
 
 use crate::reference::{Line, Measured, no};
@@ -78,6 +80,8 @@ tagged_table! {
         Berg(friction::BergParams),
         /// A fractional-derivative cell, the truncated Grünwald sum.
         Fractional(fractional::FractionalTable),
+        /// A viscous dashpot.
+        Dashpot(dashpot::DashpotTable),
     }
 }
 
@@ -93,6 +97,7 @@ impl EffectSpec {
             Self::BoucWen(_) => "bouc-wen",
             Self::Berg(_) => "berg",
             Self::Fractional(_) => "fractional",
+            Self::Dashpot(_) => "dashpot",
         }
     }
 
@@ -109,6 +114,7 @@ impl EffectSpec {
             Self::BoucWen(p) => Effect::Friction(friction::Friction::BoucWen(p)),
             Self::Berg(p) => Effect::Friction(friction::Friction::Berg(p)),
             Self::Fractional(t) => Effect::Fractional(t.check()?),
+            Self::Dashpot(d) => Effect::Dashpot(d),
         };
         let built = effect.build(setting.dt).map_err(|e| e.to_string())?;
         Ok((effect, built))
@@ -130,6 +136,8 @@ pub enum Effect {
     Friction(friction::Friction),
     /// A Grünwald fractional cell.
     Fractional(fractional::Fractional),
+    /// A viscous dashpot.
+    Dashpot(dashpot::DashpotTable),
 }
 
 impl Effect {
@@ -143,6 +151,7 @@ impl Effect {
             Self::Xf(x) => x.build(dt).map(AnyEffect::Xf),
             Self::Friction(f) => f.build(),
             Self::Fractional(f) => f.build(dt).map(AnyEffect::Fractional),
+            Self::Dashpot(d) => d.build(dt).map(AnyEffect::Dashpot),
         }
     }
 
@@ -155,6 +164,7 @@ impl Effect {
             Self::Xf(x) => x.name(),
             Self::Friction(f) => f.name(),
             Self::Fractional(f) => f.name(),
+            Self::Dashpot(d) => d.name(),
         }
     }
 
@@ -165,7 +175,7 @@ impl Effect {
             Self::Iwan(i) => i.cells.iter().map(|c| c.g).sum(),
             Self::Xf(x) => x.cells.iter().map(|c| c.g).sum(),
             Self::Fractional(f) => f.spec.g,
-            Self::TurningPoints(_) | Self::Friction(_) => 0.0,
+            Self::TurningPoints(_) | Self::Friction(_) | Self::Dashpot(_) => 0.0,
         }
     }
 
@@ -179,6 +189,7 @@ impl Effect {
             (Self::Xf(e), _) => e.references(m),
             (Self::Friction(e), _) => e.references(m),
             (Self::Fractional(_), AnyEffect::Fractional(cell)) => fractional::references(cell, m),
+            (Self::Dashpot(d), _) => d.references(m),
             _ => no("the model built is not of this effect's family"),
         }
     }
@@ -252,6 +263,8 @@ pub enum AnyEffect<T> {
     Berg(Berg<T>),
     /// Grünwald fractional cell.
     Fractional(fractional::DynGrunwald<T>),
+    /// Viscous dashpot.
+    Dashpot(Dashpot<T>),
 }
 
 /// Calls `$f` with the effect inside an [`AnyEffect`] (one arm per kind).
@@ -268,6 +281,7 @@ macro_rules! each_effect {
             $crate::family::AnyEffect::BoucWen($x) => $f,
             $crate::family::AnyEffect::Berg($x) => $f,
             $crate::family::AnyEffect::Fractional($x) => $f,
+            $crate::family::AnyEffect::Dashpot($x) => $f,
         }
     };
 }
@@ -296,6 +310,8 @@ pub enum AnyState<T: Real> {
     Berg(<Berg<T> as bushing::Effect<T>>::State),
     /// Grünwald fractional cell.
     Fractional(<fractional::DynGrunwald<T> as bushing::Effect<T>>::State),
+    /// Viscous dashpot (no state).
+    Dashpot(<Dashpot<T> as bushing::Effect<T>>::State),
 }
 
 impl<T: Real> AnyEffect<T> {
@@ -322,6 +338,7 @@ impl<T: Real> AnyEffect<T> {
             Self::BoucWen(e) => AnyState::BoucWen(e.rest(x0)),
             Self::Berg(e) => AnyState::Berg(e.rest(x0)),
             Self::Fractional(e) => AnyState::Fractional(e.rest(x0)),
+            Self::Dashpot(_) => AnyState::Dashpot(()),
         }
     }
 
@@ -346,6 +363,7 @@ impl<T: Real> AnyEffect<T> {
             (Self::BoucWen(e), AnyState::BoucWen(s)) => go(e, s, drive),
             (Self::Berg(e), AnyState::Berg(s)) => go(e, s, drive),
             (Self::Fractional(e), AnyState::Fractional(s)) => go(e, s, drive),
+            (Self::Dashpot(e), AnyState::Dashpot(s)) => go(e, s, drive),
             // A state always comes from its own effect's `rest`.
             _ => EffectOutput::zero(),
         }
@@ -403,6 +421,7 @@ untuned!(
     BoucWen<T>,
     Berg<T>,
     fractional::DynGrunwald<T>,
+    Dashpot<T>,
 );
 
 impl<T: Real> Tuned for AnyEffect<T> {
