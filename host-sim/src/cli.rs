@@ -320,7 +320,10 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
         Command::FractionalTable(a) => table(fractional_report::table, a.out.as_deref()),
         Command::Powertrain { out } => {
             let mut staged = Staged::begin(&out)?;
-            let text = powertrain::report(&mut staged).map_err(CliError::Failed)?;
+            let text = powertrain::report(&mut staged).map_err(|e| match e {
+                powertrain::ReportError::Output(o) => CliError::Output(o),
+                other => CliError::Failed(other.to_string()),
+            })?;
             staged.commit()?;
             print!("{text}");
             Ok(())
@@ -414,7 +417,7 @@ fn validate_command(args: &ValidateArgs) -> Result<(), CliError> {
         )));
     }
     let scene = args.scene.load()?;
-    let report = validate::validate(&scene).map_err(CliError::Failed)?;
+    let report = validate::validate(&scene)?;
     let beyond = report.beyond(args.tolerance);
     let failure = if report.refused > 0 {
         Some(CliError::Check(format!(

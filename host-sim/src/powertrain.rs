@@ -532,24 +532,32 @@ impl Transient {
     }
 }
 
+/// Why the powertrain report could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// The synthesised suspension refused its parameters.
+    #[error("the powertrain model: {0}")]
+    Model(#[from] ParamError),
+    /// An output file could not be written.
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
+}
+
 /// Runs both models over the stop/start transient, writes
 /// `powertrain.csv`, `powertrain-power.svg` and `powertrain-modal.svg` into
 /// `out` (committed by the caller) and returns the summary
 /// (`bushing-sim powertrain --out DIR`).
-pub fn report(out: &mut crate::output::Staged) -> Result<String, String> {
+pub fn report(out: &mut crate::output::Staged) -> Result<String, ReportError> {
     use std::fmt::Write as _;
 
     use crate::plot::{Plot, Series, render_panels};
 
     let s = Suspension::synthesised();
-    let modes = s
-        .modes(Connectivity::Invariant)
-        .map_err(|e| e.to_string())?;
+    let modes = s.modes(Connectivity::Invariant)?;
     let runs: Vec<Transient> = [Dissipation::Viscous, Dissipation::Sts]
         .into_iter()
         .map(|m| s.transient(m, DURATION, DT, 10))
-        .collect::<Result<_, _>>()
-        .map_err(|e| e.to_string())?;
+        .collect::<Result<_, _>>()?;
 
     let mut header = vec!["time_s".to_string()];
     for r in &runs {
@@ -575,11 +583,7 @@ pub fn report(out: &mut crate::output::Staged) -> Result<String, String> {
         }
     }
     let csv = table.finish();
-    let mut write = |name: &str, text: &str| {
-        out.write(name, text.as_bytes())
-            .map(drop)
-            .map_err(|e| e.to_string())
-    };
+    let mut write = |name: &str, text: &str| out.write(name, text.as_bytes()).map(drop);
     write("powertrain.csv", &csv)?;
 
     let power = Plot {

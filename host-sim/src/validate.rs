@@ -127,9 +127,9 @@ impl fmt::Display for Report {
 }
 
 /// Compares `scene` with its closed-form references. Errors only when the
-/// scene's model cannot be built; a missing reference is a line of the
+/// scene's model cannot be built or stepped ([`RunError`]); a missing reference is a line of the
 /// report.
-pub fn validate(scene: &Scene) -> Result<Report, String> {
+pub fn validate(scene: &Scene) -> Result<Report, RunError> {
     match scene.number {
         NumberType::F32 => validate_typed::<f32>(scene),
         NumberType::F64 => validate_typed::<f64>(scene),
@@ -287,8 +287,8 @@ impl<T: Real> Sink<T> for WindowSink<'_> {
     }
 }
 
-fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
-    let mut bushing = model::compile::<T>(scene).map_err(|e| e.to_string())?;
+fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, RunError> {
+    let mut bushing = model::compile::<T>(scene)?;
     let names = model::effect_names(scene);
     let none = |why: &str| Report {
         refused: 0,
@@ -340,7 +340,7 @@ fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
         start,
         last,
     };
-    run::drive_steps(scene, bushing.as_mut(), end, &mut [&mut sink]).map_err(|e| e.to_string())?;
+    run::drive_steps(scene, bushing.as_mut(), end, &mut [&mut sink])?;
     let t0 = start as f64 * scene.dt;
     let kind = match p.kind {
         Kind::Sine(f) => format!("sine of {:e} mm at {f:e} Hz", p.amplitude),
@@ -356,7 +356,7 @@ fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
     );
     let k_lin = linear_stiffness(&scene.backbone);
     let inner = inner_loop_energies::<T>(scene, p.amplitude)?;
-    let built = scene.built::<T>().map_err(|e| e.to_string())?;
+    let built = scene.built::<T>()?;
     // K* = F / X, phasors a - i b of a cos + b sin.
     let xp = w.harmonic.fit(0);
     let x2 = xp.map_or(f64::NAN, |(a, b)| a * a + b * b);
@@ -412,8 +412,8 @@ fn validate_typed<T: Real + 'static>(scene: &Scene) -> Result<Report, String> {
 /// refused). The symmetric loops of the profile return onto the first
 /// loading curve; this loop closes on a turning point inside an outer loop,
 /// where a law has to split the closing step between the two branches.
-fn inner_loop_energies<T: Real + 'static>(scene: &Scene, a: f64) -> Result<Vec<f64>, String> {
-    let mut bushing = model::compile::<T>(scene).map_err(|e| e.to_string())?;
+fn inner_loop_energies<T: Real + 'static>(scene: &Scene, a: f64) -> Result<Vec<f64>, RunError> {
+    let mut bushing = model::compile::<T>(scene)?;
     let x0 = scene.input(0.0);
     let (lo, hi) = (x0 + 0.2 * a, x0 + (0.2 + INNER_SPAN) * a);
     let mut path = Vec::new();
