@@ -405,7 +405,7 @@ fn profile_errors_name_the_field_the_bound_and_the_csv_row() {
     );
     assert!(
         e.starts_with(&format!(
-            "profile: cannot read replay file {}: ",
+            "profile: replay file {}: cannot read: ",
             name("missing.csv")
         )),
         "{e}"

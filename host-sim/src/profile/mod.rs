@@ -118,12 +118,7 @@ pub const MAX_LIST: usize = 10_000;
 pub const MAX_SINE_STEPS: usize = 100_000;
 /// Most events of a stop/start profile.
 pub const MAX_EVENTS: usize = 64;
-/// Most samples a replayed CSV file may hold.
-pub const MAX_SAMPLES: usize = 10_000_000;
-/// Largest replayed CSV file, in bytes.
-pub const MAX_CSV_BYTES: u64 = 1 << 30;
-/// Highest 1-based column index accepted.
-pub const MAX_COLUMN: i64 = 10_000;
+pub use crate::records::{MAX_COLUMN, MAX_CSV_BYTES, MAX_SAMPLES};
 
 /// Number of steps of a profile at time step `dt`, or why it is unusable
 /// (the message names the parameter and the bound it breaks).

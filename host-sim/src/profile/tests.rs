@@ -1,7 +1,8 @@
 use std::f64::consts::TAU;
 
-use super::replay::{Time, read_csv};
+use super::replay::read_csv;
 use super::*;
+use crate::records::Time;
 
 const DT: f64 = 1e-3;
 
@@ -624,7 +625,7 @@ fn stop_start_errors_name_the_field_and_bound() {
 }
 
 fn csv(text: &str, column: Column, time: Time<'_>) -> Result<Vec<(f64, f64)>, String> {
-    read_csv("m.csv", text, &column, time)
+    read_csv("m.csv", text, &column, time).map_err(|e| e.to_string())
 }
 
 #[test]
@@ -754,7 +755,7 @@ fn resolve_reads_the_file_and_checks_the_fields() {
     )
     .unwrap_err();
     assert!(
-        e.starts_with("cannot read replay file ") && e.contains("d.csv"),
+        e.starts_with("replay file ") && e.contains("d.csv: cannot read: "),
         "{e}"
     );
     let mut directory = replay(Column::Index(2), None, Some(2.0));
@@ -762,7 +763,7 @@ fn resolve_reads_the_file_and_checks_the_fields() {
         *file = ".".into();
     }
     let e = resolve(directory, &dir, false).unwrap_err();
-    assert!(e.ends_with(" is not a regular file"), "{e}");
+    assert!(e.ends_with(": not a regular file"), "{e}");
     let mut empty_name = replay(Column::Index(2), None, Some(2.0));
     if let ProfileSpec::Replay(Replay { file, .. }) = &mut empty_name {
         file.clear();

@@ -1,0 +1,236 @@
+//! The identification's input: campaigns read and checked, and the first
+//! harmonic of measured sines.
+//!
+//! `tests/campaigns/broken/` holds one campaign per mistake; its
+//! `campaign.toml` starts with the text its error must contain (`# expect:
+//! …`, one or more) and, for a mistake with a place, `# at: LINE`.
+
+use std::f64::consts::TAU;
+use std::path::{Path, PathBuf};
+
+use bushing::{Bushing, MaxwellForm, MaxwellSpec, Polynomial};
+use bushing_sim::family::maxwell::{DynMaxwell, Storage};
+use bushing_sim::identify::campaign::{Campaign, Kind, Nominal, Record, Test, TestError};
+use bushing_sim::identify::sine::{SinePoint, first_harmonic};
+
+fn broken() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/campaigns/broken")
+}
+
+#[test]
+fn every_broken_campaign_gives_its_expected_error() {
+    let mut seen = 0;
+    let mut dirs: Vec<_> = std::fs::read_dir(broken())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .collect();
+    dirs.sort();
+    let mut wrong = Vec::new();
+    for dir in dirs {
+        let text = std::fs::read_to_string(dir.join("campaign.toml")).unwrap();
+        let expect: Vec<&str> = text
+            .lines()
+            .filter_map(|l| l.strip_prefix("# expect: "))
+            .collect();
+        let at = text.lines().find_map(|l| l.strip_prefix("# at: "));
+        assert!(!expect.is_empty(), "{}: no `# expect:` line", dir.display());
+        let message = match Campaign::load(&dir, true) {
+            Ok(c) => format!("read, {} tests usable", c.tests.len()),
+            Err(e) => e.to_string(),
+        };
+        let placed = at.is_none_or(|line| message.contains(&format!("campaign.toml:{line}:")));
+        if !placed || !expect.iter().all(|e| message.contains(e)) {
+            wrong.push(format!(
+                "{}\n  got {message}\n  expected {expect:?} at {at:?}",
+                dir.display()
+            ));
+        }
+        seen += 1;
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    assert!(seen >= 15, "{seen} broken campaigns");
+}
+
+/// One bad test is left out with its reason; the others are read.
+#[test]
+fn one_bad_test_does_not_stop_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = std::fs::read_to_string(broken().join("14-negative-frequency/sine.csv")).unwrap();
+    std::fs::write(dir.path().join("good.csv"), &good).unwrap();
+    std::fs::write(
+        dir.path().join("bad.csv"),
+        "time_s,x_mm,force_n\n0,0,0\n0,1,1\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("campaign.toml"),
+        r#"[campaign]
+name = "part"
+
+[[test]]
+name = "good"
+kind = "sine"
+file = "good.csv"
+frequency_hz = 5.0
+
+[[test]]
+name = "bad"
+kind = "triangle"
+file = "bad.csv"
+
+[[test]]
+name = "road"
+kind = "cobbles"
+file = "good.csv"
+"#,
+    )
+    .unwrap();
+    let c = Campaign::load(dir.path(), false).unwrap();
+    assert_eq!(c.name, "part");
+    assert_eq!(c.tests.len(), 1);
+    assert_eq!(c.tests[0].name, "good");
+    assert_eq!(c.tests[0].kind, Kind::Sine);
+    assert_eq!(c.tests[0].record.len(), 60);
+    let reasons: Vec<String> = c
+        .excluded
+        .iter()
+        .map(|e| format!("{}: {}", e.name, e.reason))
+        .collect();
+    assert_eq!(reasons.len(), 2, "{reasons:?}");
+    assert!(
+        reasons[0].starts_with("bad: ")
+            && reasons[0]
+                .ends_with("bad.csv: row 3, column 1: time 0 s is not after the 0 s of row 2"),
+        "{reasons:?}"
+    );
+    assert_eq!(
+        reasons[1],
+        "road: kind 'cobbles' is not one of multi-step, triangle, sine, other"
+    );
+}
+
+/// A sine record of a linear backbone with a Maxwell bank, stepped at the
+/// sampling step itself: its steady state is the discrete bank's exact
+/// response, which the first harmonic must give back.
+fn maxwell_sine(f: f64, a: f64, per: usize, periods: usize) -> (Test, (f64, f64), f64) {
+    let k = 120.0;
+    let dt = 1.0 / (f * per as f64);
+    let cells = [MaxwellSpec::hz(f, 0.2), MaxwellSpec::hz(4.0 * f, 0.3)];
+    let bank =
+        DynMaxwell::<f64>::new(MaxwellForm::RateExactRamp, &cells, dt, Storage::Plain).unwrap();
+    let (re, im) = bank.branch_response(TAU * f);
+    let g0 = 0.5;
+    let b = Bushing::new(
+        Polynomial::<f64, 2>::new(&[0.0, k], (-10.0, 10.0)).unwrap(),
+        (bank,),
+    )
+    .unwrap();
+    let mut s = b.state_at(0.0);
+    let mut record = Record::default();
+    for n in 0..=per * periods {
+        let t = n as f64 * dt;
+        let x = a * (TAU * f * t).sin();
+        let o = b.step(&mut s, x);
+        record.time.push(t);
+        record.x.push(x);
+        record.force.push(o.force);
+    }
+    let test = Test {
+        name: "sine".into(),
+        kind: Kind::Sine,
+        file: PathBuf::from("sine.csv"),
+        nominal: Nominal {
+            frequency_hz: Some(f),
+            amplitude_mm: Some(a),
+            preload_mm: Some(0.0),
+            speed_mm_per_min: None,
+        },
+        record,
+    };
+    (test, (k * (g0 + re), k * im), k)
+}
+
+#[test]
+fn the_first_harmonic_of_a_maxwell_sine_is_the_bank_s_exact_response() {
+    // The first period is left out: the slower cell's transient has decayed
+    // by e^-2π ≈ 2e-3 at the window's start, and what is left of it over
+    // 59 periods is below 1e-5 of the moduli.
+    let (test, (storage, loss), _) = maxwell_sine(5.0, 0.25, 50, 60);
+    let p: SinePoint = first_harmonic(&test).unwrap();
+    assert_eq!(p.periods, 59);
+    assert!((p.samples_per_period - 50.0).abs() < 1e-9);
+    assert!(
+        (p.storage / storage - 1.0).abs() < 1e-5,
+        "{} {storage}",
+        p.storage
+    );
+    assert!((p.loss / loss - 1.0).abs() < 1e-5, "{} {loss}", p.loss);
+    assert!((p.amplitude_mm / 0.25 - 1.0).abs() < 1e-12);
+    assert!(p.preload_mm.abs() < 1e-12);
+    // The trapezoid rule over a sampled first harmonic: π X² K″ sin θ / θ,
+    // θ = 2π / 50 (0.26 % below π X² K″).
+    let theta = TAU / 50.0;
+    let w = std::f64::consts::PI * 0.25 * 0.25 * loss * theta.sin() / theta;
+    assert!(
+        (p.energy_per_cycle / w - 1.0).abs() < 1e-5,
+        "{} {w}",
+        p.energy_per_cycle
+    );
+    assert!(p.secant > p.storage && p.loss_factor > 0.0);
+    // W_d / (A_F A_x), with A_F = K_s A_x.
+    let x = &test.record.x;
+    let ax =
+        x.iter().cloned().fold(f64::MIN, f64::max) - x.iter().cloned().fold(f64::MAX, f64::min);
+    let w_norm = p.energy_per_cycle / (p.secant * ax * ax);
+    assert!((p.normalised_energy / w_norm - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn sines_that_fail_a_check_are_excluded_with_the_reason() {
+    let reason = |t: &Test| match first_harmonic(t) {
+        Err(TestError::Check(m)) => m,
+        other => panic!("{other:?}"),
+    };
+    // Too few samples per period.
+    let (t, ..) = maxwell_sine(5.0, 0.25, 8, 10);
+    assert!(
+        reason(&t).starts_with("8.0 samples per period at 5 Hz, at least 10 needed"),
+        "{}",
+        reason(&t)
+    );
+    // A sine the machine did not follow: half the nominal amplitude.
+    let (mut t, ..) = maxwell_sine(50.0, 0.05, 50, 10);
+    t.nominal.amplitude_mm = Some(0.1);
+    assert!(
+        reason(&t).starts_with("recorded amplitude 0.0500 mm, nominal 0.1 mm"),
+        "{}",
+        reason(&t)
+    );
+    // A nominal frequency the record does not have.
+    let (mut t, ..) = maxwell_sine(5.0, 0.25, 50, 10);
+    t.nominal.frequency_hz = Some(6.0);
+    assert!(reason(&t).contains("not a sine at 6 Hz"), "{}", reason(&t));
+    // A clipped force.
+    let (mut t, ..) = maxwell_sine(5.0, 0.25, 50, 10);
+    let top = 0.8 * t.record.force.iter().cloned().fold(f64::MIN, f64::max);
+    for f in &mut t.record.force {
+        *f = f.min(top);
+    }
+    assert!(
+        reason(&t).starts_with("the force is clipped: "),
+        "{}",
+        reason(&t)
+    );
+    // A triangle written as a sine.
+    let (mut t, ..) = maxwell_sine(5.0, 0.25, 50, 10);
+    for (x, time) in t.record.x.iter_mut().zip(&t.record.time) {
+        let phase = (time * 5.0).fract();
+        *x = 0.25 * (1.0 - 4.0 * (phase - 0.5).abs());
+    }
+    assert!(
+        reason(&t).starts_with("the displacement is not a sine at 5 Hz"),
+        "{}",
+        reason(&t)
+    );
+}
