@@ -57,6 +57,9 @@ pub enum Command {
     IwanTable(TableArgs),
     /// Grünwald accuracy, Maxwell fits and their cost.
     FractionalTable(TableArgs),
+    /// A test campaign generated from a scene's model (seed 000 Appendix
+    /// B part grids): OUT/campaign.toml and one CSV per test.
+    Campaign(CampaignArgs),
     /// The engine on three 6-DOF mounts (seed 000 §5.2): modes against
     /// Table 5.2, stop/start transient, plots.
     Powertrain {
@@ -117,6 +120,31 @@ impl SceneArgs {
         };
         Ok(Scene::load_with(&self.scene, options)?)
     }
+}
+
+/// `campaign`.
+#[derive(Debug, Args)]
+pub struct CampaignArgs {
+    /// The scene whose backbone and effects play the part (its profile
+    /// and rate are not used).
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Output folder (written whole or not at all).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Gaussian noise on the force: standard deviation as a share of each
+    /// test's force range.
+    #[arg(long, default_value_t = 0.005)]
+    pub noise: f64,
+    /// Seed of the noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Hold of each multi-step level, s (Table B.2: 3600).
+    #[arg(long, default_value_t = 3600.0)]
+    pub hold_s: f64,
+    /// Preloads of the sines, mm (Table B.2: 0,1,2,3).
+    #[arg(long, value_delimiter = ',', default_value = "0,1,2,3")]
+    pub preloads: Vec<f64>,
 }
 
 /// `run`.
@@ -318,6 +346,7 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
         Command::XfTable(a) => table(xf_report::table, a.out.as_deref()),
         Command::IwanTable(a) => table(iwan_report::table, a.out.as_deref()),
         Command::FractionalTable(a) => table(fractional_report::table, a.out.as_deref()),
+        Command::Campaign(a) => campaign(&a),
         Command::Powertrain { out } => {
             let mut staged = Staged::begin(&out)?;
             let text = powertrain::report(&mut staged).map_err(|e| match e {
@@ -453,6 +482,44 @@ fn validate_command(args: &ValidateArgs) -> Result<(), CliError> {
 
 /// Prints a report, or writes it whole into `out` (a temporary file
 /// beside it, renamed into place).
+/// `campaign`: the grid generated into a staged folder.
+fn campaign(a: &CampaignArgs) -> Result<(), CliError> {
+    use crate::identify::synth::{self, SynthError};
+    let scene = a.scene.load()?;
+    if !(a.hold_s.is_finite() && a.hold_s >= 1.0 && a.hold_s <= 86_400.0) {
+        return Err(CliError::Usage(format!(
+            "--hold-s {} must be from 1 to 86400 s",
+            a.hold_s
+        )));
+    }
+    if let Some(p) = a
+        .preloads
+        .iter()
+        .find(|p| !(p.is_finite() && p.abs() <= 100.0))
+    {
+        return Err(CliError::Usage(format!(
+            "--preloads: {p} mm must be finite and within 100 mm"
+        )));
+    }
+    let grid = synth::part_grid(a.hold_s, &a.preloads);
+    let mut staged = Staged::begin(&a.out)?;
+    let samples =
+        synth::write(&scene, &grid, a.noise, a.seed, &mut staged).map_err(|e| match e {
+            SynthError::Output(o) => CliError::Output(o),
+            SynthError::Noise(_) => CliError::Usage(e.to_string()),
+            other => CliError::Failed(other.to_string()),
+        })?;
+    let path = staged.commit()?;
+    println!(
+        "campaign: {} tests, {samples} samples, force noise {} of each range (seed {}) in {}",
+        grid.len(),
+        a.noise,
+        a.seed,
+        path.display()
+    );
+    Ok(())
+}
+
 fn table(make: fn() -> String, out: Option<&Path>) -> Result<(), CliError> {
     let text = make();
     let Some(out) = out else {

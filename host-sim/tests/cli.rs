@@ -42,7 +42,7 @@ fn help_and_version_succeed_for_every_command() {
         .assert()
         .code(0)
         .stdout(predicate::str::starts_with("bushing-sim "));
-    for command in ["run", "validate", "cost", "compare-trace", "maxwell-table"] {
+    for command in ["run", "validate", "cost", "campaign", "compare-trace", "maxwell-table"] {
         sim()
             .args([command, "--help"])
             .assert()
@@ -628,4 +628,39 @@ fn json_is_one_object_even_when_a_check_fails() {
             .unwrap()
             .contains("beyond the tolerance")
     );
+}
+
+/// `campaign` writes a campaign the identification reads back, whole or
+/// not at all; a noise that is not a share of the range is a usage error.
+#[test]
+fn campaign_writes_a_readable_campaign_and_refuses_a_bad_noise() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("campaign");
+    sim()
+        .args([
+            "campaign",
+            "scenes/maxwell4.toml",
+            "--hold-s",
+            "30",
+            "--preloads",
+            "0",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(0)
+        .stdout(predicate::str::starts_with("campaign: 56 tests, "));
+    let c = bushing_sim::identify::campaign::Campaign::load(&out, true).unwrap();
+    assert_eq!((c.tests.len(), c.excluded.len()), (56, 0));
+    let bad = dir.path().join("bad");
+    sim()
+        .args(["campaign", "scenes/maxwell4.toml", "--noise", "1.5"])
+        .arg("--out")
+        .arg(&bad)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(
+            "noise = 1.5 must be finite and in [0, 1)",
+        ));
+    assert!(!bad.exists(), "nothing written for a refused campaign");
 }

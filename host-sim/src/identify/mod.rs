@@ -1,7 +1,8 @@
 //! Identification of a bushing model from a measured test campaign (seed
 //! 000 chapter 3): the campaign as recorded ([`campaign`]) and the
 //! pre-processing of its tests ([`sine`]: the first harmonic of each
-//! sine).
+//! sine), and campaigns generated from a known model ([`synth`]).
 
 pub mod campaign;
 pub mod sine;
+pub mod synth;

@@ -1,5 +1,5 @@
 //! The first harmonic of a measured sine (seed 000 §3.2.5): over the last
-//! whole periods of the record, the least-squares first harmonic of the
+//! half of the record's whole periods, the least-squares first harmonic of the
 //! displacement and of the force gives the storage K′ and loss K″ moduli
 //! and the loss factor; the loop gives the secant modulus `K_s = A_F /
 //! A_x` (eq 3.5, peak-to-peak over peak-to-peak, eq 3.4) and the energy
@@ -86,8 +86,10 @@ pub fn first_harmonic(test: &Test) -> Result<SinePoint, TestError> {
             "{duration} s is less than one period at {f} Hz"
         )));
     }
-    // The last whole periods, after the first one when there are two or more.
-    let periods = if whole >= 2 { whole - 1 } else { whole };
+    // The last half of the whole periods (at least one): the transient of
+    // the slow cells after the start is what biases the first harmonic,
+    // and it decays with the time before the window.
+    let periods = (whole / 2).max(1);
     let start = duration - periods as f64 / f;
     let first = r.time.partition_point(|&t| t < start - 1e-9 / f);
     let window = first..r.len();

@@ -155,6 +155,19 @@ pub fn build<T: Real + 'static>(scene: &Scene) -> Result<SceneBushing<T>, ParamE
     )
 }
 
+/// The bushing of a scene's backbone and effects built for another time
+/// step `dt` (s) than the scene's own: each family's constructor again, at
+/// `dt` (a campaign generated from a model samples each test at its own
+/// rate).
+pub fn build_at<T: Real>(scene: &Scene, dt: f64) -> Result<SceneBushing<T>, ParamError> {
+    let effects = scene
+        .effects()
+        .iter()
+        .map(|e| e.build::<T>(dt))
+        .collect::<Result<_, _>>()?;
+    Bushing::new(backbone::<T>(&scene.backbone)?, EffectList { effects })
+}
+
 /// Names of the effects present, in trace-column order.
 pub fn effect_names(scene: &Scene) -> Vec<String> {
     scene

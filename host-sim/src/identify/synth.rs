@@ -1,0 +1,371 @@
+//! Campaigns generated from a known model: the tests of a grid (by
+//! default the part grids of seed 000 Appendix B, Table B.2) run on a
+//! scene's backbone and effects in f64, sampled as the seed's machine
+//! samples them (§3.2.3: 20 Hz on multi-step ramps and 1 Hz during the
+//! holds, 3 Hz at 10 mm/min and 0.3 Hz at 1 mm/min on triangles, 50
+//! samples per period on sines), with Gaussian noise on the force. What
+//! the identification is tested on, and the worked example.
+//!
+//! Each test is stepped at its own model step (a whole fraction of its
+//! sampling step), from rest at 0 mm. A sine is recorded after a lead-in
+//! of whole periods (at least 5, and at least 2 s, plus 20 s with a
+//! preload, reached over its first 10 s) in which the model settles into
+//! its steady cycle, as the machine's sweeps do (Fig. 3.3); the other
+//! tests are recorded from their start.
+
+use std::f64::consts::TAU;
+
+use bushing::ParamError;
+use bushing_kernels::Noise;
+
+use super::campaign::Kind;
+use crate::csv_text::CsvText;
+use crate::model;
+use crate::output::{OutputError, Staged};
+use crate::scene::Scene;
+
+/// What one generated test imposes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Shape {
+    /// 20 s ramps to each level, each held `hold_s`.
+    MultiStep {
+        /// Levels in mm, in order.
+        levels: Vec<f64>,
+        /// Hold at each level, s.
+        hold_s: f64,
+    },
+    /// Constant-speed triangles about a preload.
+    Triangle {
+        /// Speed, mm/min.
+        speed_mm_per_min: f64,
+        /// Amplitude, mm.
+        amplitude_mm: f64,
+        /// Preload, mm.
+        preload_mm: f64,
+        /// Whole cycles.
+        cycles: u32,
+    },
+    /// A sine about a preload.
+    Sine {
+        /// Frequency, Hz.
+        frequency_hz: f64,
+        /// Amplitude, mm.
+        amplitude_mm: f64,
+        /// Preload, mm.
+        preload_mm: f64,
+        /// Whole cycles.
+        cycles: u32,
+    },
+}
+
+/// Ramp time of a multi-step level, s (§3.2.3).
+pub const RAMP_S: f64 = 20.0;
+/// Settling of a preloaded sine before its lead-in, s: the preload is
+/// reached over the first half (the seed's machine waits 20 minutes).
+pub const PRELOAD_S: f64 = 20.0;
+/// Model steps per sample.
+const SUBSTEPS: usize = 4;
+
+impl Shape {
+    /// The test's name in the campaign.
+    pub fn name(&self) -> String {
+        match self {
+            Self::MultiStep { levels, hold_s } => format!("ms-{}x{hold_s}", levels.len()),
+            Self::Triangle {
+                speed_mm_per_min,
+                amplitude_mm,
+                preload_mm,
+                ..
+            } => format!("tri-{speed_mm_per_min}-{preload_mm}-{amplitude_mm}"),
+            Self::Sine {
+                frequency_hz,
+                amplitude_mm,
+                preload_mm,
+                ..
+            } => format!("sine-{frequency_hz}-{preload_mm}-{amplitude_mm}"),
+        }
+    }
+
+    fn kind(&self) -> Kind {
+        match self {
+            Self::MultiStep { .. } => Kind::MultiStep,
+            Self::Triangle { .. } => Kind::Triangle,
+            Self::Sine { .. } => Kind::Sine,
+        }
+    }
+
+    /// Duration, s.
+    pub fn duration(&self) -> f64 {
+        match self {
+            Self::MultiStep { levels, hold_s } => levels.len() as f64 * (RAMP_S + hold_s),
+            Self::Triangle {
+                speed_mm_per_min,
+                amplitude_mm,
+                cycles,
+                ..
+            } => f64::from(*cycles) * 4.0 * amplitude_mm / (speed_mm_per_min / 60.0),
+            Self::Sine {
+                frequency_hz,
+                cycles,
+                ..
+            } => f64::from(*cycles) / frequency_hz + self.lead(),
+        }
+    }
+
+    /// Time before the record starts, s: a sine's lead-in of whole periods,
+    /// at least 5 and at least 2 s, plus [`PRELOAD_S`] when it has a
+    /// preload; 0 for the other tests.
+    pub fn lead(&self) -> f64 {
+        match self {
+            Self::Sine {
+                frequency_hz,
+                preload_mm,
+                ..
+            } => {
+                let settle = if *preload_mm == 0.0 { 0.0 } else { PRELOAD_S };
+                ((2.0 + settle) * frequency_hz).ceil().max(5.0) / frequency_hz
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Sampling rate at time `t`, Hz.
+    fn sample_hz(&self, t: f64) -> f64 {
+        match self {
+            Self::MultiStep { hold_s, .. } => {
+                if t.rem_euclid(RAMP_S + hold_s) < RAMP_S {
+                    20.0
+                } else {
+                    1.0
+                }
+            }
+            // 3 Hz at 10 mm/min, 0.3 Hz at 1 mm/min: 18 samples per mm.
+            Self::Triangle {
+                speed_mm_per_min, ..
+            } => 0.3 * speed_mm_per_min,
+            Self::Sine { frequency_hz, .. } => 50.0 * frequency_hz,
+        }
+    }
+
+    /// The model's step, s: a fraction [`SUBSTEPS`] of the finest sampling
+    /// step of the test.
+    fn model_dt(&self) -> f64 {
+        let finest = match self {
+            Self::MultiStep { .. } => 20.0,
+            _ => self.sample_hz(0.0),
+        };
+        1.0 / (finest * SUBSTEPS as f64)
+    }
+
+    /// Displacement at `t`, mm.
+    pub fn displacement(&self, t: f64) -> f64 {
+        match self {
+            Self::MultiStep { levels, hold_s } => {
+                let period = RAMP_S + hold_s;
+                let k = ((t / period).floor() as usize).min(levels.len().saturating_sub(1));
+                let from = if k == 0 { 0.0 } else { levels[k - 1] };
+                let u = ((t - k as f64 * period) / RAMP_S).clamp(0.0, 1.0);
+                from + (levels[k] - from) * u
+            }
+            Self::Triangle {
+                speed_mm_per_min,
+                amplitude_mm,
+                preload_mm,
+                ..
+            } => {
+                // From the preload up first: a quarter period to the top.
+                let period = 4.0 * amplitude_mm / (speed_mm_per_min / 60.0);
+                let p = (t / period + 0.25).rem_euclid(1.0);
+                preload_mm + amplitude_mm * (1.0 - 4.0 * (p - 0.5).abs())
+            }
+            Self::Sine {
+                frequency_hz,
+                amplitude_mm,
+                preload_mm,
+                ..
+            } => {
+                // The preload reached over the first half of its settling.
+                let ramp = (2.0 * t / PRELOAD_S).min(1.0);
+                preload_mm * ramp + amplitude_mm * (TAU * frequency_hz * t).sin()
+            }
+        }
+    }
+}
+
+/// The part grids of Table B.2 of seed 000: the multi-step levels 0.5 to
+/// 5 mm held `hold_s` (3600 s in the table); triangles at 1 and 10 mm/min,
+/// 3 cycles, the amplitude sweep 0.05 to 4.5 mm at no preload and the
+/// preloads 1 to 4 mm at 1 mm; sines of 5 cycles at 0.1 to 100 Hz and
+/// 0.05 to 1 mm about the preloads 0 to 3 mm (`preloads`).
+pub fn part_grid(hold_s: f64, preloads: &[f64]) -> Vec<Shape> {
+    let mut grid = vec![Shape::MultiStep {
+        levels: vec![0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0],
+        hold_s,
+    }];
+    for speed in [1.0, 10.0] {
+        for a in [0.05, 0.1, 0.25, 0.5, 1.0, 4.5] {
+            grid.push(Shape::Triangle {
+                speed_mm_per_min: speed,
+                amplitude_mm: a,
+                preload_mm: 0.0,
+                cycles: 3,
+            });
+        }
+        for p in [1.0, 2.0, 3.0, 4.0] {
+            grid.push(Shape::Triangle {
+                speed_mm_per_min: speed,
+                amplitude_mm: 1.0,
+                preload_mm: p,
+                cycles: 3,
+            });
+        }
+    }
+    for &p in preloads {
+        for f in [0.1, 0.5, 1.0, 5.0, 10.0, 50.0, 100.0] {
+            for a in [0.05, 0.1, 0.25, 0.5, 1.0] {
+                grid.push(Shape::Sine {
+                    frequency_hz: f,
+                    amplitude_mm: a,
+                    preload_mm: p,
+                    cycles: 5,
+                });
+            }
+        }
+    }
+    grid
+}
+
+/// Why a campaign could not be generated.
+#[derive(Debug, thiserror::Error)]
+pub enum SynthError {
+    /// The model refused a test's time step.
+    #[error("test {test}: the model at dt = {dt} s: {source}")]
+    Model {
+        /// The test.
+        test: String,
+        /// Its model step, s.
+        dt: f64,
+        /// What the model refused.
+        source: ParamError,
+    },
+    /// The model refused a step of a test (its force left the guard).
+    #[error("test {test}: the model refused the step at t = {t} s")]
+    Refused {
+        /// The test.
+        test: String,
+        /// Time of the step, s.
+        t: f64,
+    },
+    /// A noise level that is not a fraction.
+    #[error("noise = {0} must be finite and in [0, 1) (a share of each test's force range)")]
+    Noise(f64),
+    /// Writing failed.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+}
+
+/// One generated record: (time s, displacement mm, force N) per sample,
+/// without noise.
+pub fn record(scene: &Scene, shape: &Shape) -> Result<Vec<[f64; 3]>, SynthError> {
+    let dt = shape.model_dt();
+    let bushing = model::build_at::<f64>(scene, dt).map_err(|source| SynthError::Model {
+        test: shape.name(),
+        dt,
+        source,
+    })?;
+    let mut state = bushing.state_at(0.0);
+    let steps = (shape.duration() / dt).round() as u64;
+    let mut rows = Vec::new();
+    let mut next_sample = 0.0;
+    let lead = shape.lead();
+    for n in 0..=steps {
+        let t = n as f64 * dt;
+        let x = shape.displacement(t);
+        let force = if n == 0 {
+            state.force()
+        } else {
+            let o = bushing.step(&mut state, x);
+            if o.effects.is_none() {
+                return Err(SynthError::Refused {
+                    test: shape.name(),
+                    t,
+                });
+            }
+            o.force
+        };
+        if t >= next_sample - 0.5 * dt {
+            if t >= lead - 0.5 * dt {
+                rows.push([t - lead, x, force]);
+            }
+            next_sample = t + 1.0 / shape.sample_hz(t);
+        }
+    }
+    Ok(rows)
+}
+
+/// Writes `campaign.toml` and one CSV per test of `grid`, generated from
+/// `scene`'s model, into `out`; the force gets Gaussian noise of standard
+/// deviation `noise` times the test's force range (`seed` sets the
+/// draws). Returns the number of samples written.
+pub fn write(
+    scene: &Scene,
+    grid: &[Shape],
+    noise: f64,
+    seed: u64,
+    out: &mut Staged,
+) -> Result<usize, SynthError> {
+    if !(noise.is_finite() && (0.0..1.0).contains(&noise)) {
+        return Err(SynthError::Noise(noise));
+    }
+    let mut draws = Noise::new(seed);
+    let mut toml = format!(
+        "# Generated by `bushing-sim campaign` from the model of a scene ({}),\n\
+         # force noise {noise} of each test's range, seed {seed}.\n\
+         [campaign]\nname = \"{}\"\n",
+        scene.title.replace(['"', '\\', '\n'], " "),
+        scene.title.replace(['"', '\\', '\n'], " ")
+    );
+    let mut samples = 0;
+    for shape in grid {
+        let rows = record(scene, shape)?;
+        let (lo, hi) = rows
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
+                (lo.min(r[2]), hi.max(r[2]))
+            });
+        let sigma = noise * (hi - lo);
+        let name = shape.name();
+        let mut csv = CsvText::new(["time_s", "x_mm", "force_n"]);
+        for r in &rows {
+            let f = r[2] + sigma * draws.gauss();
+            csv.record([r[0].to_string(), r[1].to_string(), f.to_string()]);
+        }
+        samples += rows.len();
+        out.write(&format!("{name}.csv"), csv.finish().as_bytes())?;
+        toml.push_str(&format!(
+            "\n[[test]]\nname = \"{name}\"\nkind = \"{}\"\nfile = \"{name}.csv\"\n",
+            shape.kind().name()
+        ));
+        match shape {
+            Shape::MultiStep { .. } => {}
+            Shape::Triangle {
+                speed_mm_per_min,
+                amplitude_mm,
+                preload_mm,
+                ..
+            } => toml.push_str(&format!(
+                "speed_mm_per_min = {speed_mm_per_min:?}\namplitude_mm = {amplitude_mm:?}\npreload_mm = {preload_mm:?}\n"
+            )),
+            Shape::Sine {
+                frequency_hz,
+                amplitude_mm,
+                preload_mm,
+                ..
+            } => toml.push_str(&format!(
+                "frequency_hz = {frequency_hz:?}\namplitude_mm = {amplitude_mm:?}\npreload_mm = {preload_mm:?}\n"
+            )),
+        }
+    }
+    out.write("campaign.toml", toml.as_bytes())?;
+    Ok(samples)
+}
