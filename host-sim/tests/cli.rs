@@ -42,7 +42,14 @@ fn help_and_version_succeed_for_every_command() {
         .assert()
         .code(0)
         .stdout(predicate::str::starts_with("bushing-sim "));
-    for command in ["run", "validate", "cost", "campaign", "compare-trace", "maxwell-table"] {
+    for command in [
+        "run",
+        "validate",
+        "cost",
+        "campaign",
+        "compare-trace",
+        "maxwell-table",
+    ] {
         sim()
             .args([command, "--help"])
             .assert()

@@ -315,3 +315,151 @@ fn a_generated_campaign_reads_back_with_the_model_s_moduli() {
         assert_eq!(sines, 70);
     }
 }
+
+/// A generated test as the campaign reader would give it (no noise).
+fn generated(model: &str, shape: bushing_sim::identify::synth::Shape, kind: Kind) -> Test {
+    let scene = bushing_sim::Scene::parse("model.toml", model).unwrap();
+    let rows = bushing_sim::identify::synth::record(&scene, &shape).unwrap();
+    let mut record = Record::default();
+    for [t, x, f] in rows {
+        record.time.push(t);
+        record.x.push(x);
+        record.force.push(f);
+    }
+    Test {
+        name: shape.name(),
+        kind,
+        file: PathBuf::from("generated.csv"),
+        nominal: Nominal::default(),
+        record,
+    }
+}
+
+/// Each multi-step hold is found, and its end force is the long-term
+/// backbone g^0 K x once the Maxwell cells have relaxed.
+#[test]
+fn multi_step_holds_end_on_the_long_term_backbone() {
+    use bushing_sim::identify::relax::holds;
+    use bushing_sim::identify::synth::Shape;
+    let levels = vec![0.5, 1.0, 1.5, 2.0, 3.0];
+    let test = generated(
+        MAXWELL_MODEL,
+        Shape::MultiStep {
+            levels: levels.clone(),
+            hold_s: 60.0,
+        },
+        Kind::MultiStep,
+    );
+    let h = holds(&test).unwrap();
+    assert_eq!(h.len(), levels.len());
+    for (hold, level) in h.iter().zip(&levels) {
+        assert!((hold.level_mm - level).abs() < 1e-12, "{hold:?}");
+        assert!((hold.duration_s - 60.0).abs() <= 1.0, "{}", hold.duration_s);
+        let long_term = 0.65 * 150.0 * level;
+        assert!(
+            (hold.force_end / long_term - 1.0).abs() < 1e-9,
+            "{} {long_term}",
+            hold.force_end
+        );
+        // It relaxes: the start still carries some of the cells' share.
+        assert!(hold.force_start > hold.force_end);
+    }
+    let sine = generated(
+        MAXWELL_MODEL,
+        Shape::Sine {
+            frequency_hz: 1.0,
+            amplitude_mm: 1.0,
+            preload_mm: 0.0,
+            cycles: 3,
+        },
+        Kind::MultiStep,
+    );
+    assert!(matches!(holds(&sine), Err(TestError::Check(m)) if m.starts_with("no hold")));
+}
+
+const IWAN_MODEL: &str = r#"
+title = "linear backbone and two Jenkins cells"
+[run]
+rate_hz = 1000
+number = "f64"
+[backbone]
+type = "polynomial"
+coefficients = [0.0, 100.0]
+range = [-10.0, 10.0]
+[[effects]]
+type = "iwan"
+form = "clamp"
+cells = [{ g = 0.2, x_f = 0.5 }, { g = 0.3, x_f = 1.2 }]
+[profile]
+type = "sine"
+amplitude = 1.0
+frequency_hz = 1.0
+cycles = 1
+"#;
+
+/// Along a branch, the instantaneous modulus of an Iwan bank on a linear
+/// backbone K steps down by g_i K where cell i slips, at twice its slip
+/// distance from the turning point (Masing): K, then 0.8 K past 1 mm,
+/// then 0.5 K past 2.4 mm. The low-pass smooths each kink over a few
+/// samples (18 a millimetre), which the checks keep clear of.
+#[test]
+fn triangle_branches_show_each_cell_slipping_at_twice_its_distance() {
+    use bushing_sim::identify::synth::Shape;
+    use bushing_sim::identify::triangle::branches;
+    let test = generated(
+        IWAN_MODEL,
+        Shape::Triangle {
+            speed_mm_per_min: 10.0,
+            amplitude_mm: 4.0,
+            preload_mm: 0.0,
+            cycles: 3,
+        },
+        Kind::Triangle,
+    );
+    let t = branches(&test).unwrap();
+    assert!((t.amplitude_mm - 4.0).abs() < 1e-9 && t.preload_mm.abs() < 1e-9);
+    assert!(
+        (t.speed_mm_per_min - 10.0).abs() < 1e-6,
+        "{}",
+        t.speed_mm_per_min
+    );
+    // The first loading from rest, then 6 reversals (the last one cut).
+    assert!(t.branches.len() >= 6, "{}", t.branches.len());
+    let mut checked = 0;
+    for b in &t.branches[1..] {
+        assert!((b.turning_mm.abs() - 4.0).abs() < 1e-9, "{}", b.turning_mm);
+        for &(d, k) in &b.modulus {
+            let expect = if (0.15..0.65).contains(&d) {
+                100.0
+            } else if (1.35..1.95).contains(&d) {
+                80.0
+            } else if (2.85..7.8).contains(&d) {
+                50.0
+            } else {
+                continue;
+            };
+            assert!(
+                (k / expect - 1.0).abs() < 0.01,
+                "d = {d}: {k} against {expect}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "{checked}");
+    // Too few samples per branch: 0.05 mm at 10 mm/min, 3 Hz.
+    let tiny = generated(
+        IWAN_MODEL,
+        Shape::Triangle {
+            speed_mm_per_min: 10.0,
+            amplitude_mm: 0.05,
+            preload_mm: 0.0,
+            cycles: 3,
+        },
+        Kind::Triangle,
+    );
+    assert!(
+        matches!(branches(&tiny), Err(TestError::Check(m)) if m.starts_with("no branch of 5 samples")),
+        "{:?}",
+        branches(&tiny)
+    );
+}

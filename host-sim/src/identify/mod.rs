@@ -1,8 +1,12 @@
 //! Identification of a bushing model from a measured test campaign (seed
 //! 000 chapter 3): the campaign as recorded ([`campaign`]) and the
 //! pre-processing of its tests ([`sine`]: the first harmonic of each
-//! sine), and campaigns generated from a known model ([`synth`]).
+//! sine; [`relax`]: the relaxation of each multi-step hold; [`triangle`]:
+//! the filtered branches of each triangle test and their instantaneous
+//! modulus), and campaigns generated from a known model ([`synth`]).
 
 pub mod campaign;
+pub mod relax;
 pub mod sine;
 pub mod synth;
+pub mod triangle;
