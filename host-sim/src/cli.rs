@@ -60,6 +60,10 @@ pub enum Command {
     /// A test campaign generated from a scene's model (seed 000 Appendix
     /// B part grids): OUT/campaign.toml and one CSV per test.
     Campaign(CampaignArgs),
+    /// A campaign's tests reduced for identification (seed 000 §3.2-3.4):
+    /// OUT/report.md and its figures; each test left out is named with
+    /// its reason.
+    Preprocess(PreprocessArgs),
     /// The engine on three 6-DOF mounts (seed 000 §5.2): modes against
     /// Table 5.2, stop/start transient, plots.
     Powertrain {
@@ -120,6 +124,19 @@ impl SceneArgs {
         };
         Ok(Scene::load_with(&self.scene, options)?)
     }
+}
+
+/// `preprocess`.
+#[derive(Debug, Args)]
+pub struct PreprocessArgs {
+    /// The campaign's folder (its campaign.toml and the tests' CSV files).
+    pub campaign: PathBuf,
+    /// Output folder (written whole or not at all).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The tests' files must lie inside the campaign's folder.
+    #[arg(long)]
+    pub confine: bool,
 }
 
 /// `campaign`.
@@ -347,6 +364,7 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
         Command::IwanTable(a) => table(iwan_report::table, a.out.as_deref()),
         Command::FractionalTable(a) => table(fractional_report::table, a.out.as_deref()),
         Command::Campaign(a) => campaign(&a),
+        Command::Preprocess(a) => preprocess(&a),
         Command::Powertrain { out } => {
             let mut staged = Staged::begin(&out)?;
             let text = powertrain::report(&mut staged).map_err(|e| match e {
@@ -482,6 +500,34 @@ fn validate_command(args: &ValidateArgs) -> Result<(), CliError> {
 
 /// Prints a report, or writes it whole into `out` (a temporary file
 /// beside it, renamed into place).
+/// `preprocess`: the campaign read, reduced and reported.
+fn preprocess(a: &PreprocessArgs) -> Result<(), CliError> {
+    use crate::identify::campaign::{Campaign, CampaignError};
+    use crate::identify::report;
+    let campaign = Campaign::load(&a.campaign, a.confine).map_err(|e| match e {
+        CampaignError::NothingUsable { .. } => CliError::Failed(e.to_string()),
+        other => CliError::Usage(other.to_string()),
+    })?;
+    let p = report::preprocess(&campaign);
+    let mut staged = Staged::begin(&a.out)?;
+    p.write(&mut staged)?;
+    let path = staged.commit()?;
+    println!(
+        "preprocess: {} tests used ({} sines, {} multi-step, {} triangle, {} other), {} left out; report in {}",
+        p.used(),
+        p.sines.len(),
+        p.holds.len(),
+        p.triangles.len(),
+        p.others.len(),
+        p.excluded.len(),
+        path.join("report.md").display()
+    );
+    for e in &p.excluded {
+        println!("left out: {}: {}", e.name, e.reason);
+    }
+    Ok(())
+}
+
 /// `campaign`: the grid generated into a staged folder.
 fn campaign(a: &CampaignArgs) -> Result<(), CliError> {
     use crate::identify::synth::{self, SynthError};

@@ -22,6 +22,7 @@ pub mod fractional_report;
 pub mod harmonic;
 pub mod identify;
 pub mod iwan_report;
+pub mod markdown;
 pub mod model;
 pub mod modulus;
 pub mod output;

@@ -671,3 +671,72 @@ fn campaign_writes_a_readable_campaign_and_refuses_a_bad_noise() {
         ));
     assert!(!bad.exists(), "nothing written for a refused campaign");
 }
+
+/// `preprocess` reads a campaign, reports each step and names each test
+/// it leaves out with its reason; a campaign it cannot read is a usage
+/// error and writes nothing.
+#[test]
+fn preprocess_reports_every_test_and_each_one_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let campaign = dir.path().join("campaign");
+    sim()
+        .args([
+            "campaign",
+            "scenes/hysteresis-triangle.toml",
+            "--hold-s",
+            "60",
+            "--preloads",
+            "0",
+        ])
+        .arg("--out")
+        .arg(&campaign)
+        .assert()
+        .code(0);
+    let out = dir.path().join("pre");
+    sim()
+        .arg("preprocess")
+        .arg(&campaign)
+        .arg("--out")
+        .arg(&out)
+        .arg("--confine")
+        .assert()
+        .code(0)
+        .stdout(
+            predicate::str::contains(
+                "54 tests used (35 sines, 1 multi-step, 18 triangle, 0 other), 2 left out",
+            )
+            .and(predicate::str::contains(
+                "left out: tri-1-0-0.05: no branch of 5 samples or more",
+            )),
+        );
+    let report = fs::read_to_string(out.join("report.md")).unwrap();
+    for section in [
+        "## Tests left out",
+        "## Sines",
+        "## Multi-step holds",
+        "## Triangles",
+    ] {
+        assert!(report.contains(section), "{section}");
+    }
+    assert_eq!(report.matches("\n| sine-").count(), 35);
+    for svg in [
+        "modulus-frequency.svg",
+        "modulus-amplitude.svg",
+        "relaxation.svg",
+        "instantaneous-modulus.svg",
+    ] {
+        let text = fs::read_to_string(out.join(svg)).unwrap();
+        bushing_sim::plot::well_formed(&text).unwrap_or_else(|e| panic!("{svg}: {e}"));
+    }
+    let broken = root().join("tests/campaigns/broken/04-duplicate-name");
+    let nothing = dir.path().join("nothing");
+    sim()
+        .arg("preprocess")
+        .arg(&broken)
+        .arg("--out")
+        .arg(&nothing)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("is named twice"));
+    assert!(!nothing.exists());
+}

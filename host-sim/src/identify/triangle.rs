@@ -44,7 +44,8 @@ pub struct Triangles {
 }
 
 /// The branches of a triangle test, filtered, with their instantaneous
-/// modulus; nominal amplitude, preload and speed checked.
+/// modulus; nominal amplitude, preload and speed checked (within 10 %, or
+/// one sample step of displacement for the amplitude and the preload).
 pub fn branches(test: &Test) -> Result<Triangles, TestError> {
     let check = |m: String| TestError::Check(m);
     if test.kind != Kind::Triangle {
@@ -68,29 +69,6 @@ pub fn branches(test: &Test) -> Result<Triangles, TestError> {
         .collect();
     speeds.sort_by(f64::total_cmp);
     let speed = speeds.get(speeds.len() / 2).copied().unwrap_or(f64::NAN);
-    let n = &test.nominal;
-    let off = |seen: f64, nominal: f64, scale: f64| (seen - nominal).abs() > 0.1 * scale;
-    if let Some(a) = n.amplitude_mm
-        && off(amplitude, a, a)
-    {
-        return Err(check(format!(
-            "recorded amplitude {amplitude:.4} mm, nominal {a} mm"
-        )));
-    }
-    if let Some(p) = n.preload_mm
-        && off(preload, p, amplitude)
-    {
-        return Err(check(format!(
-            "recorded middle of the range {preload:.4} mm, nominal preload {p} mm"
-        )));
-    }
-    if let Some(v) = n.speed_mm_per_min
-        && off(speed, v, v)
-    {
-        return Err(check(format!(
-            "recorded speed {speed:.4} mm/min, nominal {v} mm/min"
-        )));
-    }
     // Branches: runs of one sign of dx; a still sample joins the run.
     let mut cuts = vec![0];
     let mut sign = 0.0;
@@ -137,6 +115,34 @@ pub fn branches(test: &Test) -> Result<Triangles, TestError> {
             "no branch of {MIN_BRANCH_SAMPLES} samples or more: {} samples for a range of {:.4} mm at {speed:.3} mm/min",
             r.len(),
             hi - lo
+        )));
+    }
+    // The record cannot show a turning point closer than one sample step.
+    let mut steps: Vec<f64> = r.x.windows(2).map(|x| (x[1] - x[0]).abs()).collect();
+    steps.sort_by(f64::total_cmp);
+    let step = steps.get(steps.len() / 2).copied().unwrap_or(0.0);
+    let n = &test.nominal;
+    let off =
+        |seen: f64, nominal: f64, scale: f64| (seen - nominal).abs() > (0.1 * scale).max(step);
+    if let Some(a) = n.amplitude_mm
+        && off(amplitude, a, a)
+    {
+        return Err(check(format!(
+            "recorded amplitude {amplitude:.4} mm, nominal {a} mm"
+        )));
+    }
+    if let Some(p) = n.preload_mm
+        && off(preload, p, amplitude)
+    {
+        return Err(check(format!(
+            "recorded middle of the range {preload:.4} mm, nominal preload {p} mm"
+        )));
+    }
+    if let Some(v) = n.speed_mm_per_min
+        && off(speed, v, v)
+    {
+        return Err(check(format!(
+            "recorded speed {speed:.4} mm/min, nominal {v} mm/min"
         )));
     }
     Ok(Triangles {
