@@ -740,3 +740,70 @@ fn preprocess_reports_every_test_and_each_one_left_out() {
         .stderr(predicate::str::contains("is named twice"));
     assert!(!nothing.exists());
 }
+
+/// A replay whose CSV also has a measured force: `run` overlays it on the
+/// force plots and prints the model's RMS residual. Here the record is a
+/// generated test of the same model with 0.5 % noise: the residual is that
+/// noise (and the replay's start from rest), not more.
+#[test]
+fn a_replay_with_a_measured_force_reports_its_residual() {
+    let dir = tempfile::tempdir().unwrap();
+    let campaign = dir.path().join("campaign");
+    sim()
+        .args([
+            "campaign",
+            "scenes/maxwell4.toml",
+            "--hold-s",
+            "30",
+            "--preloads",
+            "0",
+        ])
+        .args(["--noise", "0.005", "--seed", "3"])
+        .arg("--out")
+        .arg(&campaign)
+        .assert()
+        .code(0);
+    // The 5 Hz, 1 mm sine: 50 samples a period, replayed at the scene's rate.
+    let text = fs::read_to_string(scene("maxwell4.toml")).unwrap();
+    let model = &text[..text.find("[profile]").unwrap()];
+    let replay = format!(
+        "{model}[profile]\ntype = \"replay\"\nfile = \"campaign/sine-5-0-1.csv\"\n\
+         column = \"x_mm\"\ntime_column = \"time_s\"\nforce_column = \"force_n\"\n"
+    );
+    let path = dir.path().join("replay.toml");
+    fs::write(&path, &replay).unwrap();
+    let out = dir.path().join("out");
+    let run = sim()
+        .arg("run")
+        .arg(&path)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(0);
+    let stdout = String::from_utf8(run.get_output().stdout.clone()).unwrap();
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("measured force RMS residual"))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    let percent: f64 = line
+        .split(", ")
+        .nth(1)
+        .and_then(|p| p.split(' ').next())
+        .and_then(|p| p.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"));
+    assert!((0.3..2.0).contains(&percent), "{line}");
+    let plot = fs::read_to_string(out.join("force-time.svg")).unwrap();
+    assert!(plot.contains("measured force"));
+    // A force column the file does not have.
+    fs::write(&path, replay.replace("\"force_n\"", "\"F\"")).unwrap();
+    sim()
+        .arg("run")
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.path().join("none"))
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains(
+            "no column named 'F' for force_column",
+        ));
+}

@@ -136,6 +136,15 @@ pub fn displacement(p: &ProfileSpec, t: f64) -> f64 {
     p.profile().displacement(t)
 }
 
+/// The measured force at time `t` (s), N, for a replay with a force
+/// column; `None` for every other profile.
+pub fn measured_force(p: &ProfileSpec, t: f64) -> Option<f64> {
+    match p {
+        ProfileSpec::Replay(r) => r.measured_force(t),
+        _ => None,
+    }
+}
+
 /// Frequency in Hz of the sine the profile imposes at time `t` (s), or
 /// `None` where it is not a sine. Stepped sines give the frequency of the
 /// step under way (`None` during rests, ramps and holds); a sweep gives its

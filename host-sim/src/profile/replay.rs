@@ -25,10 +25,27 @@ pub struct Replay {
     /// Sampling rate of the file in Hz; not with `time_column`.
     #[serde(default)]
     pub rate_hz: Option<f64>,
+    /// A measured force column in N (name or 1-based index): `run`
+    /// overlays it on its force plots and reports the model's RMS
+    /// residual against it.
+    #[serde(default)]
+    pub force_column: Option<Column>,
     /// The samples (time from the first sample in s, displacement in
     /// mm), read from `file` when the scene is loaded.
     #[serde(skip)]
     pub samples: Vec<(f64, f64)>,
+    /// The measured force at the same times (N), when `force_column` is
+    /// given.
+    #[serde(skip)]
+    pub measured: Vec<(f64, f64)>,
+}
+
+impl Replay {
+    /// The measured force at `t` (s), linearly interpolated, when the
+    /// replay has a force column.
+    pub fn measured_force(&self, t: f64) -> Option<f64> {
+        (!self.measured.is_empty()).then(|| interpolate(&self.measured, t))
+    }
 }
 
 impl Profile for Replay {
@@ -74,6 +91,7 @@ pub fn resolve(p: ProfileSpec, dir: &Path, confine: bool) -> Result<ProfileSpec,
         column,
         time_column,
         rate_hz,
+        force_column,
         ..
     }) = p
     else {
@@ -96,13 +114,33 @@ pub fn resolve(p: ProfileSpec, dir: &Path, confine: bool) -> Result<ProfileSpec,
     }
     let replay_file = |e: crate::records::RecordError| format!("replay file {e}");
     let (name, text) = read_file(dir, &file, confine, "the scene's folder").map_err(replay_file)?;
-    let samples = read_csv(&name, &text, &column, time).map_err(|e| e.to_string())?;
+    let (samples, measured) = match &force_column {
+        None => (
+            read_csv(&name, &text, &column, time).map_err(|e| e.to_string())?,
+            Vec::new(),
+        ),
+        Some(f) => {
+            check_column("force_column", f)?;
+            let rows = read_table(
+                &name,
+                &text,
+                [("column", &column), ("force_column", f)],
+                time,
+            )
+            .map_err(|e| e.to_string())?;
+            rows.into_iter()
+                .map(|(t, [x, force])| ((t, x), (t, force)))
+                .unzip()
+        }
+    };
     Ok(ProfileSpec::Replay(Replay {
         file,
         column,
         time_column,
         rate_hz,
+        force_column,
         samples,
+        measured,
     }))
 }
 

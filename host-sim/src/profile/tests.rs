@@ -644,7 +644,9 @@ fn csv_with_header_and_time_column() {
         column: Column::Index(2),
         time_column: Some(Column::Index(1)),
         rate_hz: None,
+        force_column: None,
         samples: vec![(0.0, 0.0), (0.5, 1.0), (1.0, -1.0)],
+        measured: Vec::new(),
     });
     assert_eq!(steps(&p, DT), Ok(1000));
     assert_eq!(displacement(&p, 0.5), 1.0);
@@ -711,7 +713,9 @@ fn resolve_reads_the_file_and_checks_the_fields() {
             column,
             time_column,
             rate_hz,
+            force_column: None,
             samples: Vec::new(),
+            measured: Vec::new(),
         })
     };
     let p = resolve(

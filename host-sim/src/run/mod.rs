@@ -35,7 +35,7 @@ use bushing::Real;
 use serde::Serialize;
 
 pub use pipeline::{CHUNK, Sink, Step, drive, drive_steps};
-pub use plots::{PLOT_POINTS, PlotSink, TIME_BUCKETS};
+pub use plots::{MeasuredFit, PLOT_POINTS, PlotSink, TIME_BUCKETS};
 pub use progress::Progress;
 pub use trace::{TraceSink, column_name, row_bytes};
 
@@ -94,6 +94,10 @@ pub struct Summary {
     pub modulus: Vec<ModulusPoint>,
     /// Modulus points were thinned to stay under [`MAX_MODULUS_POINTS`].
     pub modulus_capped: bool,
+    /// The model's force against the measured force of a replay with a
+    /// force column.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measured: Option<MeasuredFit>,
     /// Files written.
     pub files: Vec<PathBuf>,
 }
@@ -123,6 +127,13 @@ impl std::fmt::Display for Summary {
                 String::new()
             };
             writeln!(f, "modulus points {}{capped}", self.modulus.len())?;
+        }
+        if let Some(m) = &self.measured {
+            writeln!(
+                f,
+                "measured force RMS residual {:.6e} N, {:.3} % of the measured range {:.6e} N ({} steps)",
+                m.rms_n, m.rms_percent, m.range_n, m.steps
+            )?;
         }
         for file in &self.files {
             writeln!(f, "wrote          {}", file.display())?;
@@ -227,7 +238,7 @@ fn run_typed<T: Real + 'static>(
     )?;
     progress.finish();
     trace.finish()?;
-    let (energy, peak) = (plots.energy(), plots.peak());
+    let (energy, peak, measured) = (plots.energy(), plots.peak(), plots.measured());
     let (written, modulus, modulus_capped) = plots.write(&mut staged, options.png)?;
     let mut files = vec![trace_path];
     files.extend(written);
@@ -242,6 +253,7 @@ fn run_typed<T: Real + 'static>(
         refused: bushing.refused(),
         modulus,
         modulus_capped,
+        measured,
         files,
     })
 }

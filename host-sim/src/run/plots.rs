@@ -37,6 +37,33 @@ pub struct PlotSink<'a> {
     energy: f64,
     peak: f64,
     probe: ModulusProbe,
+    /// The replay's measured force: its time envelope, its loop points,
+    /// and the residual so far.
+    measured_t: Envelopes,
+    measured_loop: Vec<(f64, f64)>,
+    residual: Residual,
+}
+
+/// The model's force against a replay's measured force, accumulated.
+#[derive(Debug, Clone, Copy)]
+struct Residual {
+    sum_sq: f64,
+    n: u64,
+    lo: f64,
+    hi: f64,
+}
+
+/// The model's force against the force measured with a replayed record.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct MeasuredFit {
+    /// Steps compared.
+    pub steps: u64,
+    /// RMS of model force minus measured force, N.
+    pub rms_n: f64,
+    /// Range of the measured force (largest minus smallest), N.
+    pub range_n: f64,
+    /// The RMS residual as a percentage of that range.
+    pub rms_percent: f64,
 }
 
 impl<'a> PlotSink<'a> {
@@ -59,7 +86,31 @@ impl<'a> PlotSink<'a> {
             energy: 0.0,
             peak: 0.0,
             probe: ModulusProbe::new(scene.dt, stiffness).thinned(scene.trace_every),
+            measured_t: Envelopes::new(1, bucket),
+            measured_loop: Vec::new(),
+            residual: Residual {
+                sum_sq: 0.0,
+                n: 0,
+                lo: f64::INFINITY,
+                hi: f64::NEG_INFINITY,
+            },
         }
+    }
+
+    /// The model's force against the replay's measured force, when the
+    /// replay has a force column.
+    pub fn measured(&self) -> Option<MeasuredFit> {
+        let r = self.residual;
+        (r.n > 0).then(|| {
+            let rms = (r.sum_sq / r.n as f64).sqrt();
+            let range = r.hi - r.lo;
+            MeasuredFit {
+                steps: r.n,
+                rms_n: rms,
+                range_n: range,
+                rms_percent: 100.0 * rms / range,
+            }
+        })
     }
 
     /// Energy dissipated so far, mJ.
@@ -89,8 +140,12 @@ impl<'a> PlotSink<'a> {
             power_t,
             energy_t,
             probe,
+            measured_t,
+            measured_loop,
+            residual,
             ..
         } = self;
+        let measured = residual.n > 0;
         let mut w = Figures {
             out,
             png,
@@ -123,7 +178,10 @@ impl<'a> PlotSink<'a> {
                     loop_points,
                 ),
                 Series::line("long-term elastic branch g0 F_inf(x)", elastic_points),
-            ],
+            ]
+            .into_iter()
+            .chain(measured.then(|| Series::dashed("measured force", measured_loop)))
+            .collect(),
             ..Plot::default()
         };
         w.figure("force-displacement", &[loop_plot])?;
@@ -138,6 +196,10 @@ impl<'a> PlotSink<'a> {
         ];
         for (name, points) in names.iter().zip(force_series) {
             series.push(Series::line(name.clone(), points));
+        }
+        if measured {
+            let points = measured_t.finish().into_iter().next().unwrap_or_default();
+            series.push(Series::dashed("measured force", points));
         }
         let force_plot = Plot {
             title: title("Force against time"),
@@ -239,9 +301,21 @@ impl<T: Real> Sink<T> for PlotSink<'_> {
                 self.energy_t.push(j + 1, t, *total);
             }
         }
+        let measured = profile::measured_force(&self.scene.profile, t);
+        if let Some(m) = measured {
+            let r = &mut self.residual;
+            r.sum_sq += (f - m) * (f - m);
+            r.n += 1;
+            r.lo = r.lo.min(m);
+            r.hi = r.hi.max(m);
+            self.measured_t.push(0, t, m);
+        }
         if s.index.is_multiple_of(self.stride) {
             self.loop_points.push((xf, f));
             self.elastic_points.push((xf, elastic));
+            if let Some(m) = measured {
+                self.measured_loop.push((xf, m));
+            }
         }
         // An oscillator's profile is a force: no imposed displacement.
         let sine = profile::frequency_at(&self.scene.profile, t)
