@@ -86,6 +86,57 @@ impl<'de> Deserialize<'de> for Column {
     }
 }
 
+/// Why a file could not be read whole.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    /// Opening or reading failed.
+    #[error("cannot read: {0}")]
+    Io(#[from] std::io::Error),
+    /// Not a regular file (a directory, a pipe, a device).
+    #[error("not a regular file")]
+    NotRegular,
+    /// Larger than the limit.
+    #[error("{size} bytes, more than the limit of {limit}")]
+    TooLarge {
+        /// Size in bytes (the limit plus one when the file grew while
+        /// being read).
+        size: u64,
+        /// The limit.
+        limit: u64,
+    },
+    /// Not UTF-8 text.
+    #[error("cannot read: not UTF-8 text (byte {0} is not valid)")]
+    NotUtf8(usize),
+}
+
+/// The text of the file at `path`: only a regular file (a pipe or a
+/// device could block or never end) of at most `limit` bytes, checked
+/// before it is opened and again while it is read; UTF-8. The one way a
+/// scene, a campaign and a CSV record are read.
+pub fn read_limited(path: &Path, limit: u64) -> Result<String, ReadError> {
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(ReadError::NotRegular);
+    }
+    if meta.len() > limit {
+        return Err(ReadError::TooLarge {
+            size: meta.len(),
+            limit,
+        });
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(ReadError::TooLarge {
+            size: bytes.len() as u64,
+            limit,
+        });
+    }
+    String::from_utf8(bytes).map_err(|e| ReadError::NotUtf8(e.utf8_error().valid_up_to()))
+}
+
 /// Reads a CSV file named `file` relative to `dir`: only a regular file of
 /// at most [`MAX_CSV_BYTES`] (a device or a pipe could block or never
 /// end); with `confine`, the file must be inside `dir` once links and `..`
@@ -122,27 +173,7 @@ pub fn read_file(
             });
         }
     }
-    let meta = std::fs::metadata(&path).map_err(cannot)?;
-    if !meta.is_file() {
-        return Err(fail("not a regular file".into()));
-    }
-    if meta.len() > MAX_CSV_BYTES {
-        return Err(fail(format!(
-            "{} bytes, more than the limit of {MAX_CSV_BYTES}",
-            meta.len()
-        )));
-    }
-    let mut text = String::new();
-    std::fs::File::open(&path)
-        .map_err(cannot)?
-        .take(MAX_CSV_BYTES + 1)
-        .read_to_string(&mut text)
-        .map_err(cannot)?;
-    if text.len() as u64 > MAX_CSV_BYTES {
-        return Err(fail(format!(
-            "more than the limit of {MAX_CSV_BYTES} bytes"
-        )));
-    }
+    let text = read_limited(&path, MAX_CSV_BYTES).map_err(|e| fail(e.to_string()))?;
     Ok((name, text))
 }
 

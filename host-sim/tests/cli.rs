@@ -637,24 +637,24 @@ fn json_is_one_object_even_when_a_check_fails() {
     );
 }
 
+/// `bushing-sim campaign SCENE` on a small grid (30 s holds, sines about
+/// 0 mm only) with `extra` arguments, into `out`.
+fn small_campaign(scene: &str, out: &Path, extra: &[&str]) -> assert_cmd::assert::Assert {
+    sim()
+        .args(["campaign", scene, "--hold-s", "30", "--preloads", "0"])
+        .args(extra)
+        .arg("--out")
+        .arg(out)
+        .assert()
+}
+
 /// `campaign` writes a campaign the identification reads back, whole or
 /// not at all; a noise that is not a share of the range is a usage error.
 #[test]
 fn campaign_writes_a_readable_campaign_and_refuses_a_bad_noise() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("campaign");
-    sim()
-        .args([
-            "campaign",
-            "scenes/maxwell4.toml",
-            "--hold-s",
-            "30",
-            "--preloads",
-            "0",
-        ])
-        .arg("--out")
-        .arg(&out)
-        .assert()
+    small_campaign("scenes/maxwell4.toml", &out, &[])
         .code(0)
         .stdout(predicate::str::starts_with("campaign: 56 tests, "));
     let c = bushing_sim::identify::campaign::Campaign::load(&out, true).unwrap();
@@ -679,19 +679,7 @@ fn campaign_writes_a_readable_campaign_and_refuses_a_bad_noise() {
 fn preprocess_reports_every_test_and_each_one_left_out() {
     let dir = tempfile::tempdir().unwrap();
     let campaign = dir.path().join("campaign");
-    sim()
-        .args([
-            "campaign",
-            "scenes/hysteresis-triangle.toml",
-            "--hold-s",
-            "60",
-            "--preloads",
-            "0",
-        ])
-        .arg("--out")
-        .arg(&campaign)
-        .assert()
-        .code(0);
+    small_campaign("scenes/hysteresis-triangle.toml", &campaign, &[]).code(0);
     let out = dir.path().join("pre");
     sim()
         .arg("preprocess")
@@ -749,20 +737,12 @@ fn preprocess_reports_every_test_and_each_one_left_out() {
 fn a_replay_with_a_measured_force_reports_its_residual() {
     let dir = tempfile::tempdir().unwrap();
     let campaign = dir.path().join("campaign");
-    sim()
-        .args([
-            "campaign",
-            "scenes/maxwell4.toml",
-            "--hold-s",
-            "30",
-            "--preloads",
-            "0",
-        ])
-        .args(["--noise", "0.005", "--seed", "3"])
-        .arg("--out")
-        .arg(&campaign)
-        .assert()
-        .code(0);
+    small_campaign(
+        "scenes/maxwell4.toml",
+        &campaign,
+        &["--noise", "0.005", "--seed", "3"],
+    )
+    .code(0);
     // The 5 Hz, 1 mm sine: 50 samples a period, replayed at the scene's rate.
     let text = fs::read_to_string(scene("maxwell4.toml")).unwrap();
     let model = &text[..text.find("[profile]").unwrap()];

@@ -27,7 +27,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::records::{Column, RecordError, Time, read_file, read_table, shown};
+use crate::records::{Column, RecordError, Time, read_file, read_limited, read_table, shown};
 
 /// Most bytes of `campaign.toml`.
 pub const MAX_CAMPAIGN_BYTES: u64 = 1 << 20;
@@ -311,17 +311,7 @@ impl Campaign {
             file: file.clone(),
             what,
         };
-        let meta = std::fs::metadata(&path).map_err(|e| fail(format!("cannot read: {e}")))?;
-        if !meta.is_file() {
-            return Err(fail("not a regular file".into()));
-        }
-        if meta.len() > MAX_CAMPAIGN_BYTES {
-            return Err(fail(format!(
-                "{} bytes, more than the limit of {MAX_CAMPAIGN_BYTES}",
-                meta.len()
-            )));
-        }
-        let text = std::fs::read_to_string(&path).map_err(|e| fail(format!("cannot read: {e}")))?;
+        let text = read_limited(&path, MAX_CAMPAIGN_BYTES).map_err(|e| fail(e.to_string()))?;
         Self::parse(&file, &text, dir, confine)
     }
 

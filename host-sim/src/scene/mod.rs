@@ -24,6 +24,7 @@ pub use crate::profile::ProfileSpec;
 pub use errors::{Location, SceneError};
 pub use spec::*;
 
+use crate::records::{ReadError, read_limited};
 use errors::shape_error;
 use temperature::validate_temperature;
 
@@ -138,7 +139,6 @@ impl Scene {
     /// [`MAX_SCENE_BYTES`] is read (a pipe or a device could block or never
     /// end); the checks come before it is opened.
     pub fn load_with(path: &Path, options: LoadOptions) -> Result<Self, SceneError> {
-        use std::io::Read;
         let file = path.display().to_string();
         let fail = |message: String| SceneError {
             file: file.clone(),
@@ -146,30 +146,14 @@ impl Scene {
             message,
             source: None,
         };
-        let meta = std::fs::metadata(path).map_err(|e| fail(format!("cannot read: {e}")))?;
-        if !meta.is_file() {
-            return Err(fail("not a regular file; a scene is a TOML file".into()));
-        }
-        if meta.len() > MAX_SCENE_BYTES {
-            return Err(fail(format!(
-                "{} bytes, more than the limit of {MAX_SCENE_BYTES} for a scene",
-                meta.len()
-            )));
-        }
-        let mut bytes = Vec::new();
-        std::fs::File::open(path)
-            .and_then(|f| f.take(MAX_SCENE_BYTES + 1).read_to_end(&mut bytes))
-            .map_err(|e| fail(format!("cannot read: {e}")))?;
-        if bytes.len() as u64 > MAX_SCENE_BYTES {
-            return Err(fail(format!(
-                "more than the limit of {MAX_SCENE_BYTES} bytes for a scene"
-            )));
-        }
-        let text = String::from_utf8(bytes).map_err(|e| {
-            fail(format!(
-                "cannot read: not UTF-8 text (byte {} is not valid)",
-                e.utf8_error().valid_up_to()
-            ))
+        let text = read_limited(path, MAX_SCENE_BYTES).map_err(|e| {
+            fail(match e {
+                ReadError::NotRegular => "not a regular file; a scene is a TOML file".into(),
+                ReadError::TooLarge { size, limit } => {
+                    format!("{size} bytes, more than the limit of {limit} for a scene")
+                }
+                other => other.to_string(),
+            })
         })?;
         let dir = path.parent().unwrap_or(Path::new(""));
         Self::parse_with(&file, &text, dir, options)
