@@ -463,3 +463,65 @@ fn triangle_branches_show_each_cell_slipping_at_twice_its_distance() {
         branches(&tiny)
     );
 }
+
+/// The first stage: the triangles' midline is the long-term backbone
+/// g⁰ F^∞(x) of a model with every kind of hysteresis (Maxwell, Jenkins
+/// and x_f cells on a cubic backbone), within 1 %, and so are the spline
+/// knots made from it.
+#[test]
+fn the_triangle_midline_is_the_long_term_backbone() {
+    use bushing_sim::identify::backbone::{knots, midline};
+    use bushing_sim::identify::synth::Shape;
+    use bushing_sim::identify::triangle::branches;
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/hysteresis-triangle.toml"),
+    )
+    .unwrap();
+    // g0 = 1 - 0.22 (Maxwell) - 0.24 (Jenkins) - 0.2 (x_f); F_inf = 150 x + 4 x^3.
+    let long_term = |x: f64| 0.34 * (150.0 * x + 4.0 * x * x * x);
+    let triangles: Vec<_> = [(10.0, 4.5, 0.0), (1.0, 4.5, 0.0)]
+        .into_iter()
+        .map(|(speed, a, p)| {
+            let t = generated(
+                &text,
+                Shape::Triangle {
+                    speed_mm_per_min: speed,
+                    amplitude_mm: a,
+                    preload_mm: p,
+                    cycles: 2,
+                },
+                Kind::Triangle,
+            );
+            branches(&t).unwrap()
+        })
+        .collect();
+    // The Jenkins cells slip within 2 F_f / (g K) = 1.6 mm of a turning
+    // point: 2 mm keeps clear of them.
+    let points = midline(&triangles, 2.0, 0.05);
+    assert!(points.len() > 100, "{}", points.len());
+    let (lo, hi) = (points[0].0, points[points.len() - 1].0);
+    assert!(lo <= -2.4 && hi >= 2.4, "{lo} {hi}");
+    let worst = points
+        .iter()
+        .map(|&(x, f)| (f - long_term(x)).abs())
+        .fold(0.0f64, f64::max);
+    println!(
+        "midline: {} points over [{lo}, {hi}] mm, largest error {:.3e} of the force at {hi} mm",
+        points.len(),
+        worst / long_term(hi)
+    );
+    for &(x, f) in &points {
+        let want = long_term(x);
+        assert!(
+            (f - want).abs() <= 0.01 * long_term(hi),
+            "x = {x}: midline {f} against {want}"
+        );
+    }
+    let (xs, fs) = knots(&points, 9).unwrap();
+    for (x, f) in xs.iter().zip(&fs) {
+        assert!(
+            (f - long_term(*x)).abs() <= 0.01 * long_term(hi),
+            "{x}: {f}"
+        );
+    }
+}

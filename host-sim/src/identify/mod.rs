@@ -3,9 +3,12 @@
 //! pre-processing of its tests ([`sine`]: the first harmonic of each
 //! sine; [`relax`]: the relaxation of each multi-step hold; [`triangle`]:
 //! the filtered branches of each triangle test and their instantaneous
-//! modulus; [`report`]: all of it in a report with its figures), and
-//! campaigns generated from a known model ([`synth`]).
+//! modulus; [`report`]: all of it in a report with its figures), the
+//! first stage of the identification ([`backbone`]: the long-term
+//! backbone from the triangles' midlines), and campaigns generated from a
+//! known model ([`synth`]).
 
+pub mod backbone;
 pub mod campaign;
 pub mod relax;
 pub mod report;

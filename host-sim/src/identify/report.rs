@@ -7,6 +7,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
+use super::backbone::{PART_THRESHOLD_MM, knots, midline};
 use super::campaign::{Campaign, Excluded, Kind};
 use super::relax::{Hold, holds};
 use super::sine::{SinePoint, first_harmonic};
@@ -28,6 +29,13 @@ pub struct Preprocessed {
     pub triangles: Vec<(String, Triangles)>,
     /// The tests of kind `other`, kept whole for the time-domain fit.
     pub others: Vec<String>,
+    /// The triangles' midline points `(x mm, F N)` past
+    /// [`PART_THRESHOLD_MM`] from the turning points: the long-term
+    /// backbone g⁰ F^∞ (the first stage of the identification).
+    pub midline: Vec<(f64, f64)>,
+    /// Knots of the long-term backbone made from the midline, when there
+    /// are enough points and the forces increase.
+    pub long_term: Option<(Vec<f64>, Vec<f64>)>,
     /// Every test left out, when reading or here, with its reason.
     pub excluded: Vec<Excluded>,
 }
@@ -41,6 +49,8 @@ pub fn preprocess(campaign: &Campaign) -> Preprocessed {
         holds: Vec::new(),
         triangles: Vec::new(),
         others: Vec::new(),
+        midline: Vec::new(),
+        long_term: None,
         excluded: campaign.excluded.clone(),
     };
     for t in &campaign.tests {
@@ -58,8 +68,16 @@ pub fn preprocess(campaign: &Campaign) -> Preprocessed {
             p.excluded.push(Excluded { name, reason });
         }
     }
+    let triangles: Vec<_> = p.triangles.iter().map(|(_, t)| t.clone()).collect();
+    p.midline = midline(&triangles, PART_THRESHOLD_MM, MIDLINE_STEP_MM);
+    p.long_term = knots(&p.midline, LONG_TERM_KNOTS);
     p
 }
+
+/// Spacing of the midline points, mm.
+pub const MIDLINE_STEP_MM: f64 = 0.05;
+/// Knots of the long-term backbone.
+pub const LONG_TERM_KNOTS: usize = 9;
 
 /// Five decimals for the tables (no "-0.00000").
 fn g(v: f64) -> String {
@@ -198,6 +216,30 @@ impl Preprocessed {
             s.push_str(&t.finish());
             s.push('\n');
         }
+        if !self.midline.is_empty() {
+            let _ = writeln!(
+                s,
+                "## Long-term backbone (first stage)\n\n\
+                 The mean of each loading and unloading branch at the same displacement, \
+                 farther than {PART_THRESHOLD_MM} mm from their turning points (§3.4), keeps \
+                 the long-term force g⁰ F^∞(x) alone: {} points over [{:.3}, {:.3}] mm. \
+                 Figure: `long-term-backbone.svg`.\n",
+                self.midline.len(),
+                self.midline[0].0,
+                self.midline[self.midline.len() - 1].0
+            );
+            match &self.long_term {
+                Some((xs, fs)) => {
+                    let mut t = Table::new(["knot x [mm]", "g⁰ F^∞ [N]"]);
+                    for (x, f) in xs.iter().zip(fs) {
+                        t.row([g(*x), g(*f)]);
+                    }
+                    s.push_str(&t.finish());
+                    s.push('\n');
+                }
+                None => s.push_str("No knots: too few points, or forces that do not increase.\n\n"),
+            }
+        }
         if !self.others.is_empty() {
             let _ = writeln!(
                 s,
@@ -257,6 +299,28 @@ impl Preprocessed {
                 }
             }
             out.push(("instantaneous-modulus.svg", render_panels(&[p])));
+        }
+        if !self.midline.is_empty() {
+            let mut p = Plot::new(
+                "Long-term backbone: the triangles' midline",
+                "displacement x [mm]",
+                "g0 F_inf [N]",
+            );
+            p.series
+                .push(Series::markers("midline", self.midline.clone()));
+            if let Some((xs, fs)) = &self.long_term {
+                p.series.push(Series::line(
+                    "knots",
+                    xs.iter().copied().zip(fs.iter().copied()).collect(),
+                ));
+            }
+            for (name, hs) in &self.holds {
+                p.series.push(Series::markers(
+                    format!("{name}: hold ends"),
+                    hs.iter().map(|h| (h.level_mm, h.force_end)).collect(),
+                ));
+            }
+            out.push(("long-term-backbone.svg", render_panels(&[p])));
         }
         out
     }
