@@ -72,34 +72,12 @@ pub(super) fn stiff_cell_relaxes_within_one_step() -> Measure {
     Ok(e)
 }
 
-/// Relative error of the decay rate of a force held after a unit step,
-/// cell at ω·dt = `h`, over `n` steps, with storage `A`.
-fn decay_rate<A: bushing::Accumulator<f32>>(h: f64, n: usize) -> Measure {
-    let dt = 1e-3;
-    let bank = MaxwellBank::<f32, 1, A>::new(
-        MaxwellForm::RateExactRamp,
-        &[MaxwellSpec::new(h / dt, 0.5)],
-        dt,
-    )
-    .map_err(param)?;
-    let b =
-        Bushing::new(Polynomial::<f32, 2>::linear(1.0).map_err(param)?, (bank,)).map_err(param)?;
-    let mut s = b.state_at(0.0);
-    let first = effect_force(&b, &mut s, 1.0) as f64;
-    let mut last = first;
-    for _ in 0..n {
-        last = effect_force(&b, &mut s, 1.0) as f64;
-    }
-    let rate = -libm::log(last / first) / n as f64;
-    Ok(libm::fabs(rate / h - 1.0))
-}
-
 pub(super) fn slow_cell_compensated_decay_rate() -> Measure {
-    decay_rate::<Compensated<f32>>(1e-7, 200_000)
+    crate::maxwell::decay_rate_error::<Compensated<f32>>(1e-7, 200_000)
 }
 
 pub(super) fn slow_cell_plain_decay_rate() -> Measure {
-    decay_rate::<Plain<f32>>(1e-5, 20_000)
+    crate::maxwell::decay_rate_error::<Plain<f32>>(1e-5, 20_000)
 }
 
 pub(super) fn explicit_forms_at_their_limit() -> Measure {
