@@ -713,6 +713,7 @@ fn preprocess_reports_every_test_and_each_one_left_out() {
         "relaxation.svg",
         "instantaneous-modulus.svg",
         "long-term-backbone.svg",
+        "normalised-modulus.svg",
     ] {
         let text = fs::read_to_string(out.join(svg)).unwrap();
         bushing_sim::plot::well_formed(&text).unwrap_or_else(|e| panic!("{svg}: {e}"));

@@ -525,3 +525,46 @@ fn the_triangle_midline_is_the_long_term_backbone() {
         );
     }
 }
+
+/// The second stage: on an Iwan bank with a linear backbone (long-term
+/// modulus g⁰ K = 50 N/mm), two steps fitted to the normalised curve give
+/// back the two Jenkins cells: slipping at 1.0 and 2.4 mm from the
+/// turning point (twice their slip distances) with drops g_j / g⁰ of 0.4
+/// and 0.6.
+#[test]
+fn jenkins_cells_are_placed_back_on_the_normalised_curve() {
+    use bushing_sim::identify::hysteresis::{normalised, place};
+    use bushing_sim::identify::synth::Shape;
+    use bushing_sim::identify::triangle::branches;
+    let triangles: Vec<_> = [10.0, 1.0]
+        .into_iter()
+        .map(|speed| {
+            let t = generated(
+                IWAN_MODEL,
+                Shape::Triangle {
+                    speed_mm_per_min: speed,
+                    amplitude_mm: 4.0,
+                    preload_mm: 0.0,
+                    cycles: 2,
+                },
+                Kind::Triangle,
+            );
+            branches(&t).unwrap()
+        })
+        .collect();
+    let curve = normalised(&triangles, |_| 50.0, (-10.0, 10.0));
+    let cells = place(&curve, 2, 0.15).unwrap();
+    println!("placed: {cells:?}");
+    assert_eq!(cells.len(), 2);
+    for (cell, (distance, drop)) in cells.iter().zip([(1.0, 0.4), (2.4, 0.6)]) {
+        assert!(
+            (cell.distance_mm - distance).abs() < 0.06,
+            "{cell:?} against {distance} mm"
+        );
+        assert!(
+            (cell.drop / drop - 1.0).abs() < 0.03,
+            "{cell:?} against {drop}"
+        );
+    }
+    assert!(place(&curve, 0, 0.15).is_none());
+}

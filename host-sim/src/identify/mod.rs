@@ -5,11 +5,13 @@
 //! the filtered branches of each triangle test and their instantaneous
 //! modulus; [`report`]: all of it in a report with its figures), the
 //! first stage of the identification ([`backbone`]: the long-term
-//! backbone from the triangles' midlines), and campaigns generated from a
-//! known model ([`synth`]).
+//! backbone from the triangles' midlines), the second ([`hysteresis`]:
+//! Jenkins cells placed on the normalised instantaneous-modulus curve),
+//! and campaigns generated from a known model ([`synth`]).
 
 pub mod backbone;
 pub mod campaign;
+pub mod hysteresis;
 pub mod relax;
 pub mod report;
 pub mod sine;

@@ -9,6 +9,7 @@ use std::fmt::Write as _;
 
 use super::backbone::{PART_THRESHOLD_MM, knots, midline};
 use super::campaign::{Campaign, Excluded, Kind};
+use super::hysteresis::{Placed, normalised, place};
 use super::relax::{Hold, holds};
 use super::sine::{SinePoint, first_harmonic};
 use super::triangle::{Triangles, branches};
@@ -36,6 +37,11 @@ pub struct Preprocessed {
     /// Knots of the long-term backbone made from the midline, when there
     /// are enough points and the forces increase.
     pub long_term: Option<(Vec<f64>, Vec<f64>)>,
+    /// The instantaneous-modulus curve over the long-term modulus (the
+    /// knots' spline), binned: `(distance mm, ratio, points)`.
+    pub normalised: Vec<(f64, f64, usize)>,
+    /// [`JENKINS_CELLS`] Jenkins cells placed on it (the second stage).
+    pub jenkins: Option<Vec<Placed>>,
     /// Every test left out, when reading or here, with its reason.
     pub excluded: Vec<Excluded>,
 }
@@ -51,6 +57,8 @@ pub fn preprocess(campaign: &Campaign) -> Preprocessed {
         others: Vec::new(),
         midline: Vec::new(),
         long_term: None,
+        normalised: Vec::new(),
+        jenkins: None,
         excluded: campaign.excluded.clone(),
     };
     for t in &campaign.tests {
@@ -71,8 +79,23 @@ pub fn preprocess(campaign: &Campaign) -> Preprocessed {
     let triangles: Vec<_> = p.triangles.iter().map(|(_, t)| t.clone()).collect();
     p.midline = midline(&triangles, PART_THRESHOLD_MM, MIDLINE_STEP_MM);
     p.long_term = knots(&p.midline, LONG_TERM_KNOTS);
+    if let Some((xs, fs)) = &p.long_term
+        && let Ok(spline) = bushing::MonotoneSpline::<f64, LONG_TERM_KNOTS>::new(xs, fs)
+    {
+        use bushing::Backbone;
+        // Only where the knots say what the long-term modulus is.
+        let known = (xs[0], xs[xs.len() - 1]);
+        p.normalised = normalised(&triangles, |x| spline.eval(x).1, known);
+        p.jenkins = place(&p.normalised, JENKINS_CELLS, FILTER_START_MM);
+    }
     p
 }
+
+/// Jenkins cells placed by the second stage (the seed's graphical
+/// identification kept 3).
+pub const JENKINS_CELLS: usize = 3;
+/// Distance after a turning point the filtered curve needs to settle, mm.
+pub const FILTER_START_MM: f64 = 0.15;
 
 /// Spacing of the midline points, mm.
 pub const MIDLINE_STEP_MM: f64 = 0.05;
@@ -240,6 +263,25 @@ impl Preprocessed {
                 None => s.push_str("No knots: too few points, or forces that do not increase.\n\n"),
             }
         }
+        if let Some(cells) = &self.jenkins {
+            let _ = writeln!(
+                s,
+                "## Jenkins cells placed (second stage)\n\n\
+                 The instantaneous modulus over the long-term modulus of the knots' spline at \
+                 the same x, binned every {} mm, is a staircase `1 + Σ g_j / g⁰` whose steps \
+                 sit where the cells slip; {JENKINS_CELLS} steps fitted by least squares \
+                 (bins within {FILTER_START_MM} mm of a turning point left out). On a linear \
+                 backbone a cell slips at twice its slip distance x_f. Figure: \
+                 `normalised-modulus.svg`.\n",
+                super::hysteresis::BIN_MM
+            );
+            let mut t = Table::new(["slips at [mm]", "x_f on a linear backbone [mm]", "g_j / g⁰"]);
+            for c in cells {
+                t.row([g(c.distance_mm), g(0.5 * c.distance_mm), g(c.drop)]);
+            }
+            s.push_str(&t.finish());
+            s.push('\n');
+        }
         if !self.others.is_empty() {
             let _ = writeln!(
                 s,
@@ -321,6 +363,31 @@ impl Preprocessed {
                 ));
             }
             out.push(("long-term-backbone.svg", render_panels(&[p])));
+        }
+        if !self.normalised.is_empty() {
+            let mut p = Plot::new(
+                "Instantaneous modulus over the long-term modulus (§3.4)",
+                "distance to the turning point [mm]",
+                "K_inst / (g0 K_inf)",
+            );
+            p.series.push(Series::markers(
+                "binned curve",
+                self.normalised.iter().map(|b| (b.0, b.1)).collect(),
+            ));
+            if let Some(cells) = &self.jenkins {
+                // The fitted staircase: 1 + the drops still to come.
+                let end = self.normalised.last().map_or(0.0, |b| b.0);
+                let mut level: f64 = 1.0 + cells.iter().map(|c| c.drop).sum::<f64>();
+                let mut stairs = vec![(0.0, level)];
+                for c in cells {
+                    stairs.push((c.distance_mm, level));
+                    level -= c.drop;
+                    stairs.push((c.distance_mm, level));
+                }
+                stairs.push((end, level));
+                p.series.push(Series::line("placed cells", stairs));
+            }
+            out.push(("normalised-modulus.svg", render_panels(&[p])));
         }
         out
     }
