@@ -568,3 +568,44 @@ fn jenkins_cells_are_placed_back_on_the_normalised_curve() {
     }
     assert!(place(&curve, 0, 0.15).is_none());
 }
+
+/// Records too short for any analysis, built through the library, are
+/// refused with a reason rather than a panic; an empty multi-step grid
+/// stays at rest.
+#[test]
+fn degenerate_records_are_refused_not_panicked_on() {
+    use bushing_sim::identify::relax::holds;
+    use bushing_sim::identify::synth::Shape;
+    use bushing_sim::identify::triangle::branches;
+    for n in [0, 1, 3] {
+        let record = Record {
+            time: (0..n).map(|i| i as f64).collect(),
+            x: vec![0.0; n],
+            force: vec![0.0; n],
+        };
+        let test = |kind| Test {
+            name: "short".into(),
+            kind,
+            file: PathBuf::from("short.csv"),
+            nominal: Nominal::default(),
+            record: record.clone(),
+        };
+        assert!(matches!(
+            first_harmonic(&test(Kind::Sine)),
+            Err(TestError::Check(_))
+        ));
+        assert!(matches!(
+            branches(&test(Kind::Triangle)),
+            Err(TestError::Check(_))
+        ));
+        assert!(matches!(
+            holds(&test(Kind::MultiStep)),
+            Err(TestError::Check(_))
+        ));
+    }
+    let empty = Shape::MultiStep {
+        levels: Vec::new(),
+        hold_s: 10.0,
+    };
+    assert_eq!(empty.displacement(5.0), 0.0);
+}

@@ -65,6 +65,9 @@ pub fn first_harmonic(test: &Test) -> Result<SinePoint, TestError> {
         return Err(check(format!("a {} test is not a sine", test.kind.name())));
     }
     let r = &test.record;
+    if r.len() < 2 {
+        return Err(check(format!("{} samples: no period to fit", r.len())));
+    }
     let duration = r.time.last().copied().unwrap_or(0.0);
     let f = match test.nominal.frequency_hz {
         Some(f) => f,

@@ -163,9 +163,11 @@ impl Shape {
             Self::MultiStep { levels, hold_s } => {
                 let period = RAMP_S + hold_s;
                 let k = ((t / period).floor() as usize).min(levels.len().saturating_sub(1));
-                let from = if k == 0 { 0.0 } else { levels[k - 1] };
+                let level =
+                    |i: Option<usize>| i.and_then(|i| levels.get(i)).copied().unwrap_or(0.0);
+                let (from, to) = (level(k.checked_sub(1)), level(Some(k)));
                 let u = ((t - k as f64 * period) / RAMP_S).clamp(0.0, 1.0);
-                from + (levels[k] - from) * u
+                from + (to - from) * u
             }
             Self::Triangle {
                 speed_mm_per_min,

@@ -55,6 +55,12 @@ pub fn branches(test: &Test) -> Result<Triangles, TestError> {
         )));
     }
     let r = &test.record;
+    if r.len() < MIN_BRANCH_SAMPLES {
+        return Err(check(format!(
+            "{} samples, fewer than one branch of {MIN_BRANCH_SAMPLES}",
+            r.len()
+        )));
+    }
     let (lo, hi) =
         r.x.iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
@@ -89,8 +95,6 @@ pub fn branches(test: &Test) -> Result<Triangles, TestError> {
         if b + 1 - a < MIN_BRANCH_SAMPLES {
             continue;
         }
-        let t = &r.time[a..=b];
-        let rate = (b - a) as f64 / (t[b - a] - t[0]);
         let force = zero_phase(&r.force[a..=b], CUTOFF_SHARE);
         let x = &r.x[a..=b];
         let direction = (x[x.len() - 1] - x[0]).signum();
@@ -102,7 +106,6 @@ pub fn branches(test: &Test) -> Result<Triangles, TestError> {
                 ((samples[i].0 - x[0]).abs(), (f1 - f0) / (x1 - x0))
             })
             .collect();
-        debug_assert!(rate > 0.0);
         out.push(Branch {
             direction,
             turning_mm: x[0],
