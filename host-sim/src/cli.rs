@@ -64,6 +64,9 @@ pub enum Command {
     /// OUT/report.md and its figures; each test left out is named with
     /// its reason.
     Preprocess(PreprocessArgs),
+    /// A model identified from a campaign (seed 000 chapter 3): OUT/model.toml,
+    /// OUT/model.rs, OUT/model.h and OUT/report.md with its figures.
+    Identify(IdentifyArgs),
     /// The engine on three 6-DOF mounts (seed 000 §5.2): modes against
     /// Table 5.2, stop/start transient, plots.
     Powertrain {
@@ -134,6 +137,40 @@ pub struct PreprocessArgs {
     /// Output folder (written whole or not at all).
     #[arg(long)]
     pub out: PathBuf,
+    /// The tests' files must lie inside the campaign's folder.
+    #[arg(long)]
+    pub confine: bool,
+}
+
+/// `identify`.
+#[derive(Debug, Args)]
+pub struct IdentifyArgs {
+    /// The campaign's folder (its campaign.toml and the tests' CSV files).
+    pub campaign: PathBuf,
+    /// Output folder (written whole or not at all).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The backbone's form.
+    #[arg(long, value_enum, default_value = "spline")]
+    pub backbone: crate::identify::class::BackboneForm,
+    /// Spline knots, or the polynomial's degree.
+    #[arg(long, default_value_t = 9, value_parser = clap::value_parser!(u16).range(1..=64))]
+    pub backbone_size: u16,
+    /// Maxwell cells (0: none).
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u16).range(0..=12))]
+    pub maxwell: u16,
+    /// The hysteresis: an Iwan bank, the STS law, or none.
+    #[arg(long, value_enum, default_value = "iwan")]
+    pub hysteresis: crate::identify::class::HysteresisForm,
+    /// Jenkins cells of the Iwan bank.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u16).range(1..=12))]
+    pub jenkins: u16,
+    /// Add one x_f cell (eq 1.36).
+    #[arg(long)]
+    pub xf: bool,
+    /// Tests kept out of the fit and predicted instead.
+    #[arg(long, num_args = 1.., value_name = "NAME")]
+    pub hold_out: Vec<String>,
     /// The tests' files must lie inside the campaign's folder.
     #[arg(long)]
     pub confine: bool,
@@ -365,6 +402,7 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
         Command::FractionalTable(a) => table(fractional_report::table, a.out.as_deref()),
         Command::Campaign(a) => campaign(&a),
         Command::Preprocess(a) => preprocess(&a),
+        Command::Identify(a) => identify(&a),
         Command::Powertrain { out } => {
             let mut staged = Staged::begin(&out)?;
             let text = powertrain::report(&mut staged).map_err(|e| match e {
@@ -525,6 +563,37 @@ fn preprocess(a: &PreprocessArgs) -> Result<(), CliError> {
     for e in &p.excluded {
         println!("left out: {}: {}", e.name, e.reason);
     }
+    Ok(())
+}
+
+/// `identify`: the campaign read, the model identified and written.
+fn identify(a: &IdentifyArgs) -> Result<(), CliError> {
+    use crate::identify::campaign::{Campaign, CampaignError};
+    use crate::identify::class::ModelClass;
+    use crate::identify::outcome::{IdentifyError, identify};
+    let campaign = Campaign::load(&a.campaign, a.confine).map_err(|e| match e {
+        CampaignError::NothingUsable { .. } => CliError::Failed(e.to_string()),
+        other => CliError::Usage(other.to_string()),
+    })?;
+    let class = ModelClass {
+        backbone: a.backbone,
+        backbone_size: usize::from(a.backbone_size),
+        maxwell_cells: usize::from(a.maxwell),
+        hysteresis: a.hysteresis,
+        jenkins_cells: usize::from(a.jenkins),
+        xf: a.xf,
+    };
+    let started = std::time::Instant::now();
+    let id = identify(&campaign, &class, &a.hold_out).map_err(|e| match e {
+        IdentifyError::UnknownHoldOut(_) => CliError::Usage(e.to_string()),
+        other => CliError::Failed(other.to_string()),
+    })?;
+    let seconds = started.elapsed().as_secs_f64();
+    let mut staged = Staged::begin(&a.out)?;
+    crate::identify::summary::write(&id, seconds, &mut staged)?;
+    let path = staged.commit()?;
+    print!("{}", crate::identify::summary::console(&id, seconds));
+    println!("identify: model and report in {}", path.display());
     Ok(())
 }
 

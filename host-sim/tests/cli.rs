@@ -789,3 +789,68 @@ fn a_replay_with_a_measured_force_reports_its_residual() {
             "no column named 'F' for force_column",
         ));
 }
+
+/// `identify` writes the model three ways and its report; `model.toml`
+/// runs as a scene as it is, and the numbers of `model.rs` and `model.h`
+/// are those of `model.toml`; an unknown `--hold-out` is a usage error
+/// and writes nothing.
+#[test]
+fn identify_writes_a_runnable_model_and_its_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let campaign = dir.path().join("campaign");
+    small_campaign("examples/identification/truth.toml", &campaign, &[]).code(0);
+    let out = dir.path().join("identified");
+    sim()
+        .arg("identify")
+        .arg(&campaign)
+        .args(["--hold-out", "sine-5-0-0.5"])
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(0)
+        .stdout(predicate::str::contains("1 held out"));
+    for file in [
+        "model.toml",
+        "model.rs",
+        "model.h",
+        "report.md",
+        "loop-sine-5-0-0.5.svg",
+        "identified-modulus-frequency.svg",
+        "residual.svg",
+    ] {
+        assert!(out.join(file).is_file(), "{file} missing");
+    }
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("## Held-out tests, predicted"));
+    let toml = std::fs::read_to_string(out.join("model.toml")).unwrap();
+    let scene = bushing_sim::Scene::parse("model.toml", &toml).unwrap();
+    let rust = std::fs::read_to_string(out.join("model.rs")).unwrap();
+    let header = std::fs::read_to_string(out.join("model.h")).unwrap();
+    if let bushing_sim::family::backbone::BackboneSpec::Spline { force, .. } = &scene.backbone {
+        for f in force {
+            assert!(rust.contains(&format!("{f:?}")), "{f} not in model.rs");
+            assert!(header.contains(&format!("{f:.16e}")), "{f} not in model.h");
+        }
+    } else {
+        panic!("a spline backbone was asked for");
+    }
+    let run = dir.path().join("run");
+    sim()
+        .arg("run")
+        .arg(out.join("model.toml"))
+        .arg("--out")
+        .arg(&run)
+        .assert()
+        .code(0);
+    assert!(run.join("trace.csv").is_file());
+    let refused = dir.path().join("refused");
+    sim()
+        .arg("identify")
+        .arg(&campaign)
+        .args(["--hold-out", "no-such-test", "--out"])
+        .arg(&refused)
+        .assert()
+        .code(2)
+        .stderr(predicate::str::contains("--hold-out no-such-test"));
+    assert!(!refused.exists());
+}

@@ -6,7 +6,7 @@ use serde::Deserialize;
 
 tagged_table! {
     /// `[backbone]`: F^∞(x) in N for x in mm.
-    #[derive(Debug, Clone, Deserialize)]
+    #[derive(Debug, Clone, PartialEq, Deserialize)]
     pub enum BackboneSpec, read by tag as BackboneByTag("BackboneSpec") {
         /// F = c0 + c1 x + c2 x^2 + ... on `range`, linear outside.
         Polynomial {

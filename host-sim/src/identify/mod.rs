@@ -11,9 +11,16 @@
 
 pub mod backbone;
 pub mod campaign;
+pub mod class;
+pub mod export;
 pub mod hysteresis;
+pub mod joint;
+pub mod outcome;
 pub mod relax;
+pub mod replay;
 pub mod report;
 pub mod sine;
+pub mod stages;
+pub mod summary;
 pub mod synth;
 pub mod triangle;

@@ -103,7 +103,7 @@ impl Shape {
                 amplitude_mm,
                 cycles,
                 ..
-            } => f64::from(*cycles) * 4.0 * amplitude_mm / (speed_mm_per_min / 60.0),
+            } => f64::from(*cycles) * 4.0 * amplitude_mm / (speed_mm_per_min / 60.0) + self.lead(),
             Self::Sine {
                 frequency_hz,
                 cycles,
@@ -114,9 +114,12 @@ impl Shape {
 
     /// Time before the record starts, s: a sine's lead-in of whole periods,
     /// at least 5 and at least 2 s, plus [`PRELOAD_S`] when it has a
-    /// preload; 0 for the other tests.
+    /// preload; for a preloaded triangle the preload reached over the first
+    /// half of [`PRELOAD_S`] and held over the second; 0 for the other
+    /// tests.
     pub fn lead(&self) -> f64 {
         match self {
+            Self::Triangle { preload_mm, .. } if *preload_mm != 0.0 => PRELOAD_S,
             Self::Sine {
                 frequency_hz,
                 preload_mm,
@@ -175,6 +178,11 @@ impl Shape {
                 preload_mm,
                 ..
             } => {
+                let lead = self.lead();
+                if t < lead {
+                    return preload_mm * (2.0 * t / PRELOAD_S).min(1.0);
+                }
+                let t = t - lead;
                 // From the preload up first: a quarter period to the top.
                 let period = 4.0 * amplitude_mm / (speed_mm_per_min / 60.0);
                 let p = (t / period + 0.25).rem_euclid(1.0);

@@ -7,6 +7,7 @@ mod tuned;
 
 use bushing::{Bushing, BushingState, Drive, Effect, EffectOutput, ParamError, Real};
 
+use crate::family::backbone::BackboneSpec;
 pub use crate::family::backbone::{AnyBackbone, MAX_COEFFICIENTS, MAX_POINTS, backbone};
 use crate::family::{AnyEffect, AnyState, Tuned, each_effect};
 use crate::scene::Scene;
@@ -160,12 +161,21 @@ pub fn build<T: Real + 'static>(scene: &Scene) -> Result<SceneBushing<T>, ParamE
 /// `dt` (a campaign generated from a model samples each test at its own
 /// rate).
 pub fn build_at<T: Real>(scene: &Scene, dt: f64) -> Result<SceneBushing<T>, ParamError> {
-    let effects = scene
-        .effects()
+    build_parts(&scene.backbone, scene.effects(), dt)
+}
+
+/// The bushing of a backbone and checked effects built in `T` at time
+/// step `dt` (s): a scene's parts, or a model being identified.
+pub fn build_parts<T: Real>(
+    spec: &BackboneSpec,
+    effects: &[crate::family::Effect],
+    dt: f64,
+) -> Result<SceneBushing<T>, ParamError> {
+    let effects = effects
         .iter()
         .map(|e| e.build::<T>(dt))
         .collect::<Result<_, _>>()?;
-    Bushing::new(backbone::<T>(&scene.backbone)?, EffectList { effects })
+    Bushing::new(backbone::<T>(spec)?, EffectList { effects })
 }
 
 /// Names of the effects present, in trace-column order.

@@ -1,0 +1,313 @@
+//! The joint refinement: every parameter of the class moved together to
+//! minimise the time-domain force error over every retained record, the
+//! force computed by the core's own `step` in f64 ([`super::replay`]);
+//! then the identifiability of each parameter from the final Jacobian.
+//!
+//! - **Objective.** Each test weighs the same: its residuals are the force
+//!   errors at up to [`MAX_SCORED`] evenly spread samples, over the test's
+//!   force range and the square root of their count, so the cost is the
+//!   sum over tests of (RMS error / force range)². A sine adds its
+//!   relative error of energy per cycle (the thesis's objectives 3.3 and
+//!   3.7, on W_d rather than on W_d/(A_F A_x)) times [`ENERGY_WEIGHT`]:
+//!   the loop's area is a small part of its force, which the RMS alone
+//!   leaves loose.
+//! - **Optimiser.** Levenberg-Marquardt (the `levenberg-marquardt` crate,
+//!   MINPACK's trust region) on the vector of [`Candidate::vector`], with
+//!   a forward-difference Jacobian: one replay of the campaign per
+//!   parameter. A candidate the core refuses (fractions past 1, a force
+//!   past the guard) scores a large finite cost, so the trust region
+//!   shrinks away from it. The refinement stops after [`MAX_JACOBIANS`]
+//!   Jacobians.
+//! - **Identifiability.** With `J` the final Jacobian and `s²` the
+//!   residual variance, the covariance is `s² (JᵀJ)⁻¹` (by singular
+//!   values, a direction the data do not see getting a huge variance);
+//!   a parameter's 95 % interval is ±1.96 standard deviations (a factor
+//!   for the logarithms).
+
+use std::cell::{Cell, RefCell};
+
+use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
+use nalgebra::{DMatrix, DVector, Dyn, Owned};
+
+use super::campaign::{Kind, Test, TestError};
+use super::class::Candidate;
+use super::replay::Drive;
+use super::sine::first_harmonic;
+
+/// Samples of a test the objective reads.
+pub const MAX_SCORED: usize = 400;
+/// Jacobians the refinement may compute.
+pub const MAX_JACOBIANS: usize = 12;
+/// Relative step of the forward differences (on logarithms: 1e-5).
+const STEP: f64 = 1e-5;
+/// A refused candidate's residual (in force ranges).
+const REFUSED: f64 = 10.0;
+/// Weight of a sine's relative energy-per-cycle error beside its RMS force
+/// error over the force range: 1 % of energy weighs as 0.5 % of range.
+pub const ENERGY_WEIGHT: f64 = 0.5;
+
+/// A test as the objective reads it.
+#[derive(Debug, Clone)]
+pub struct Scored {
+    /// The replay.
+    pub drive: Drive,
+    /// The record's forces, N.
+    pub measured: Vec<f64>,
+    /// The samples scored.
+    pick: Vec<usize>,
+    /// 1 / (force range × sqrt(scored samples)).
+    weight: f64,
+    /// For a sine: the test and its measured energy per cycle (mJ).
+    energy: Option<(Test, f64)>,
+}
+
+impl Scored {
+    /// The test's replay scored against its record.
+    pub fn new(drive: Drive, measured: Vec<f64>) -> Self {
+        let n = measured.len();
+        let take = n.clamp(1, MAX_SCORED);
+        let pick: Vec<usize> = (0..take)
+            .map(|k| {
+                if take > 1 {
+                    k * (n - 1) / (take - 1)
+                } else {
+                    0
+                }
+            })
+            .collect();
+        let (lo, hi) = measured
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &f| {
+                (lo.min(f), hi.max(f))
+            });
+        let range = (hi - lo).max(1e-12);
+        Self {
+            drive,
+            measured,
+            weight: 1.0 / (range * (pick.len() as f64).sqrt()),
+            pick,
+            energy: None,
+        }
+    }
+
+    /// `test` scored on its force, and a sine also on its energy per
+    /// cycle (eqs 3.2-3.3, 3.7).
+    pub fn of(test: &Test) -> Result<Self, TestError> {
+        let mut s = Self::new(Drive::new(test)?, test.record.force.clone());
+        if test.kind == Kind::Sine {
+            let w = first_harmonic(test)?.energy_per_cycle;
+            if w.is_finite() && w > 0.0 {
+                s.energy = Some((test.clone(), w));
+            }
+        }
+        Ok(s)
+    }
+
+    fn residuals(&self, forces: Option<&[f64]>, out: &mut Vec<f64>) {
+        let refused = REFUSED * self.weight * (self.measured.len() as f64).sqrt();
+        for &i in &self.pick {
+            let r = match forces.and_then(|f| f.get(i)) {
+                Some(f) => (f - self.measured[i]) * self.weight,
+                None => refused,
+            };
+            out.push(r);
+        }
+        if let Some((test, w)) = &self.energy {
+            let on_model = forces.and_then(|f| {
+                let mut t = test.clone();
+                t.record.force = f.to_vec();
+                first_harmonic(&t).ok()
+            });
+            out.push(on_model.map_or(REFUSED, |p| ENERGY_WEIGHT * (p.energy_per_cycle / w - 1.0)));
+        }
+    }
+}
+
+/// The least-squares problem of the refinement.
+struct Problem<'a> {
+    template: &'a Candidate,
+    tests: &'a [Scored],
+    params: DVector<f64>,
+    /// Residuals at `params`, once computed.
+    cached: RefCell<Option<DVector<f64>>>,
+    jacobians: Cell<usize>,
+    replays: Cell<usize>,
+}
+
+impl Problem<'_> {
+    fn residuals_at(&self, v: &[f64]) -> DVector<f64> {
+        let model = self.template.with_vector(v).model();
+        let mut out = Vec::new();
+        for t in self.tests {
+            let forces = t.drive.run(&model).ok().flatten();
+            t.residuals(forces.as_deref(), &mut out);
+        }
+        self.replays.set(self.replays.get() + 1);
+        DVector::from_vec(out)
+    }
+
+    fn jacobian_at(&self, base: &DVector<f64>) -> DMatrix<f64> {
+        let n = self.params.len();
+        let mut j = DMatrix::zeros(base.len(), n);
+        let mut v: Vec<f64> = self.params.iter().copied().collect();
+        for k in 0..n {
+            let h = STEP * v[k].abs().max(1.0);
+            let keep = v[k];
+            v[k] = keep + h;
+            let r = self.residuals_at(&v);
+            v[k] = keep;
+            j.set_column(k, &((r - base) / h));
+        }
+        j
+    }
+}
+
+impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
+    type ResidualStorage = Owned<f64, Dyn>;
+    type JacobianStorage = Owned<f64, Dyn, Dyn>;
+    type ParameterStorage = Owned<f64, Dyn>;
+
+    fn set_params(&mut self, x: &DVector<f64>) {
+        if *x != self.params {
+            self.params.copy_from(x);
+            self.cached.replace(None);
+        }
+    }
+
+    fn params(&self) -> DVector<f64> {
+        self.params.clone()
+    }
+
+    fn residuals(&self) -> Option<DVector<f64>> {
+        let mut cached = self.cached.borrow_mut();
+        if cached.is_none() {
+            *cached = Some(self.residuals_at(self.params.as_slice()));
+        }
+        cached.clone()
+    }
+
+    fn jacobian(&self) -> Option<DMatrix<f64>> {
+        if self.jacobians.get() >= MAX_JACOBIANS {
+            return None;
+        }
+        self.jacobians.set(self.jacobians.get() + 1);
+        let base = self.residuals()?;
+        Some(self.jacobian_at(&base))
+    }
+}
+
+/// A parameter's 95 % interval and whether the campaign determines it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Spread {
+    /// Half-width of the 95 % interval: relative (a logarithm's, as
+    /// `exp(1.96 σ) - 1`) or in the parameter's unit.
+    pub half_width: f64,
+    /// Whether `half_width` is relative.
+    pub relative: bool,
+    /// Why the campaign does not determine it, if it does not.
+    pub undetermined: Option<String>,
+}
+
+/// What the refinement did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refined {
+    /// The refined model.
+    pub model: Candidate,
+    /// Cost (sum over tests of (RMS / range)²) before and after.
+    pub cost: (f64, f64),
+    /// Jacobians computed.
+    pub jacobians: usize,
+    /// Replays of the whole campaign.
+    pub replays: usize,
+    /// Why it stopped.
+    pub termination: String,
+    /// Each parameter's spread, in the order of [`Candidate::params`].
+    pub spreads: Vec<Spread>,
+}
+
+/// A relative interval wider than this factor leaves a parameter
+/// undetermined.
+pub const UNDETERMINED_FACTOR: f64 = 2.0;
+
+/// Refines `start` on `tests`.
+pub fn refine(start: &Candidate, tests: &[Scored]) -> Refined {
+    let problem = Problem {
+        template: start,
+        tests,
+        params: DVector::from_vec(start.vector()),
+        cached: RefCell::new(None),
+        jacobians: Cell::new(0),
+        replays: Cell::new(0),
+    };
+    let first = problem.residuals().map_or(f64::NAN, |r| r.norm_squared());
+    let (problem, report) = LevenbergMarquardt::new()
+        .with_ftol(1e-10)
+        .with_xtol(1e-10)
+        .minimize(problem);
+    let v: Vec<f64> = problem.params.iter().copied().collect();
+    let model = start.with_vector(&v);
+    let base = problem.residuals().unwrap_or_else(|| DVector::zeros(0));
+    let cost = base.norm_squared();
+    let termination = match report.termination {
+        levenberg_marquardt::TerminationReason::User("jacobian") => {
+            format!("stopped after {MAX_JACOBIANS} Jacobians")
+        }
+        other => format!("{other:?}"),
+    };
+    let j = problem.jacobian_at(&base);
+    let spreads = spreads(&model, &j, cost);
+    Refined {
+        model,
+        cost: (first, cost),
+        jacobians: problem.jacobians.get(),
+        replays: problem.replays.get(),
+        termination,
+        spreads,
+    }
+}
+
+/// The 95 % half-widths from `s² (JᵀJ)⁻¹`.
+fn spreads(model: &Candidate, j: &DMatrix<f64>, cost: f64) -> Vec<Spread> {
+    let (m, n) = j.shape();
+    let params = model.params();
+    let s2 = cost / (m.saturating_sub(n).max(1)) as f64;
+    let svd = j.clone().svd(false, true);
+    let top = svd.singular_values.max().max(1e-300);
+    let mut variance = vec![0.0; n];
+    if let Some(vt) = &svd.v_t {
+        for (k, &sigma) in svd.singular_values.iter().enumerate() {
+            let sigma = sigma.max(top * 1e-10);
+            for (p, v) in variance.iter_mut().enumerate() {
+                *v += (vt[(k, p)] / sigma).powi(2);
+            }
+        }
+    }
+    let scales = model.scales();
+    params
+        .iter()
+        .zip(variance)
+        .zip(scales)
+        .map(|((p, var), scale)| {
+            let sd = (s2 * var).sqrt();
+            if p.log {
+                let half = (1.96 * sd).exp() - 1.0;
+                Spread {
+                    half_width: half,
+                    relative: true,
+                    undetermined: (half + 1.0 > UNDETERMINED_FACTOR).then(|| {
+                        format!(
+                            "its 95 % interval spans more than a factor {UNDETERMINED_FACTOR} \
+                             each way"
+                        )
+                    }),
+                }
+            } else {
+                Spread {
+                    half_width: 1.96 * sd * scale,
+                    relative: false,
+                    undetermined: None,
+                }
+            }
+        })
+        .collect()
+}
