@@ -15,6 +15,7 @@ use std::f64::consts::TAU;
 use std::fmt::Write as _;
 
 use super::class::Candidate;
+use super::report::Preprocessed;
 use crate::family::backbone::BackboneSpec;
 use crate::family::turning_points::STACK_DEPTH;
 
@@ -35,6 +36,26 @@ pub struct Demo {
     pub amplitude_mm: f64,
     /// Frequency, Hz.
     pub frequency_hz: f64,
+}
+
+/// The sine the written scene runs: the middle tested frequency at the
+/// largest amplitude (1 mm at 5 Hz without sines).
+pub fn demo(pre: &Preprocessed) -> Demo {
+    let mut f: Vec<f64> = pre.sines.iter().map(|(_, s)| s.frequency_hz).collect();
+    f.sort_by(f64::total_cmp);
+    let a = pre
+        .sines
+        .iter()
+        .map(|(_, s)| s.amplitude_mm)
+        .fold(0.0, f64::max);
+    Demo {
+        amplitude_mm: if a > 0.0 {
+            (a * 1e3).round() / 1e3
+        } else {
+            1.0
+        },
+        frequency_hz: f.get(f.len() / 2).copied().unwrap_or(5.0),
+    }
 }
 
 /// `model.toml`.

@@ -14,7 +14,6 @@ use super::replay::{Drive, Model};
 use super::report::{Preprocessed, preprocess};
 use super::sine::{SinePoint, first_harmonic};
 use super::stages::{StageError, Stages, stages};
-use super::summary::demo;
 
 /// A test replayed on the identified model.
 #[derive(Debug, Clone, PartialEq)]
@@ -136,7 +135,7 @@ pub fn identify(
         }
     }
     let refined = refine(&stages.initial, &scored);
-    let model_toml = export::toml(&refined.model, &campaign.name, demo(&pre));
+    let model_toml = export::toml(&refined.model, &campaign.name, export::demo(&pre));
     let scene = crate::scene::Scene::parse("model.toml", &model_toml)
         .map_err(|e| IdentifyError::Written(e.to_string()))?;
     let model = Model {

@@ -6,9 +6,8 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use super::export::{self, Demo};
+use super::export;
 use super::outcome::{Identification, TestFit};
-use super::report::Preprocessed;
 use super::sine::SinePoint;
 use crate::markdown::Table;
 use crate::output::{OutputError, Staged};
@@ -21,26 +20,6 @@ fn pct(v: f64) -> String {
 
 fn opt_pct(v: Option<f64>) -> String {
     v.map_or_else(|| "".into(), pct)
-}
-
-/// The sine the written scene runs: the middle tested frequency at the
-/// largest amplitude (1 mm at 5 Hz without sines).
-pub fn demo(pre: &Preprocessed) -> Demo {
-    let mut f: Vec<f64> = pre.sines.iter().map(|(_, s)| s.frequency_hz).collect();
-    f.sort_by(f64::total_cmp);
-    let a = pre
-        .sines
-        .iter()
-        .map(|(_, s)| s.amplitude_mm)
-        .fold(0.0, f64::max);
-    Demo {
-        amplitude_mm: if a > 0.0 {
-            (a * 1e3).round() / 1e3
-        } else {
-            1.0
-        },
-        frequency_hz: f.get(f.len() / 2).copied().unwrap_or(5.0),
-    }
 }
 
 /// The lines printed by the command.
