@@ -157,10 +157,11 @@ fn rust_effects(m: &Candidate) -> (Vec<String>, Vec<String>) {
 pub fn rust(m: &Candidate, campaign: &str) -> String {
     let name = campaign.replace('\n', " ");
     let list = |v: &[f64]| v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(", ");
+    // Plain comments, so that the file can be `include!`d in a module.
     let header = format!(
-        "//! Identified by `bushing-sim identify` from the campaign \"{name}\":\n\
-         //! the parameters of `model.toml` as constructor calls of the `bushing`\n\
-         //! crate. Units: mm, N, s; corners in Hz.\n\n"
+        "// Identified by `bushing-sim identify` from the campaign \"{name}\":\n\
+         // the parameters of `model.toml` as constructor calls of the `bushing`\n\
+         // crate. Units: mm, N, s; corners in Hz.\n\n"
     );
     let mut s = String::new();
     let (types, calls) = rust_effects(m);
@@ -279,13 +280,22 @@ pub fn rust(m: &Candidate, campaign: &str) -> String {
         0 => "()".to_string(),
         _ => format!("({},)", calls.join(", ")),
     };
+    while s.ends_with("\n\n") {
+        s.pop();
+    }
+    // A model of rate-independent effects only does not read its step.
+    let unused = if effects_call.contains("dt") {
+        ""
+    } else {
+        "    let _ = dt; // rate independent\n"
+    };
     let _ = write!(
         s,
         "\n/// The identified bushing in the number type `T`.\n\
          pub type Model<T> = Bushing<T, {backbone_type}, {effects_type}>;\n\n\
          /// The identified bushing at time step `dt` (s).\n\
          pub fn model<T: Real>(dt: f64) -> Result<Model<T>, ParamError> {{\n\
-         \x20   let _ = dt;\n\
+         {unused}\
          \x20   Bushing::new({backbone_call}, {effects_call})\n}}\n"
     );
     format!("{header}use bushing::{{{}}};\n\n{s}", imports.join(", "))

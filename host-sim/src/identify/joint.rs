@@ -126,6 +126,7 @@ impl Scored {
 /// The least-squares problem of the refinement.
 struct Problem<'a> {
     template: &'a Candidate,
+    bounds: Bounds,
     tests: &'a [Scored],
     params: DVector<f64>,
     /// Residuals at `params`, once computed.
@@ -136,8 +137,9 @@ struct Problem<'a> {
 
 impl Problem<'_> {
     fn residuals_at(&self, v: &[f64]) -> DVector<f64> {
-        let model = self.template.with_vector(v).model();
-        let mut out = Vec::new();
+        let candidate = self.template.with_vector(v);
+        let model = candidate.model();
+        let mut out = self.bounds.penalties(&candidate);
         for t in self.tests {
             let forces = t.drive.run(&model).ok().flatten();
             t.residuals(forces.as_deref(), &mut out);
@@ -229,10 +231,52 @@ pub struct Refined {
 /// undetermined.
 pub const UNDETERMINED_FACTOR: f64 = 2.0;
 
-/// Refines `start` on `tests`.
-pub fn refine(start: &Candidate, tests: &[Scored]) -> Refined {
+/// Where the refinement may take the parameters the campaign sees only
+/// through their limits: a corner frequency far past the tested band
+/// behaves as a spring (above) or as nothing (below), and a long-term
+/// fraction near zero trades against a huge F^∞ at no cost. Leaving the
+/// box costs a residual that grows with the distance from it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bounds {
+    /// Lowest corner frequency, Hz.
+    pub f_lo_hz: f64,
+    /// Highest corner frequency, Hz.
+    pub f_hi_hz: f64,
+    /// Smallest long-term fraction g⁰.
+    pub g0_min: f64,
+}
+
+impl Bounds {
+    /// Two decades below the lowest tested frequency (a relaxation test
+    /// sees slow cells) and one above the highest, g⁰ of at least 0.02.
+    pub fn tested(f_lo_hz: f64, f_hi_hz: f64) -> Self {
+        Self {
+            f_lo_hz: f_lo_hz / 100.0,
+            f_hi_hz: f_hi_hz * 10.0,
+            g0_min: 0.02,
+        }
+    }
+
+    fn penalties(&self, c: &Candidate) -> Vec<f64> {
+        let corners = c
+            .maxwell
+            .iter()
+            .map(|m| m.omega)
+            .chain(c.xf.map(|x| x.omega))
+            .map(|w| w / std::f64::consts::TAU);
+        let mut out: Vec<f64> = corners
+            .map(|f| (f / self.f_hi_hz).ln().max(0.0) + (self.f_lo_hz / f).ln().max(0.0))
+            .collect();
+        out.push(((self.g0_min - c.g0()) / self.g0_min).max(0.0));
+        out
+    }
+}
+
+/// Refines `start` on `tests`, its corners kept about `bounds`.
+pub fn refine(start: &Candidate, tests: &[Scored], bounds: Bounds) -> Refined {
     let problem = Problem {
         template: start,
+        bounds,
         tests,
         params: DVector::from_vec(start.vector()),
         cached: RefCell::new(None),

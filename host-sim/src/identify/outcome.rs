@@ -8,7 +8,7 @@
 use super::campaign::{Campaign, Kind, Test, TestError};
 use super::class::{Candidate, ModelClass};
 use super::export;
-use super::joint::{Refined, Scored, refine};
+use super::joint::{Bounds, Refined, Scored, refine};
 use super::relax::holds;
 use super::replay::{Drive, Model};
 use super::report::{Preprocessed, preprocess};
@@ -134,7 +134,19 @@ pub fn identify(
             Err(e) => unreplayed.push((t.name.clone(), e.to_string())),
         }
     }
-    let refined = refine(&stages.initial, &scored);
+    let (f_lo, f_hi) = pre
+        .sines
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), (_, s)| {
+            (lo.min(s.frequency_hz), hi.max(s.frequency_hz))
+        });
+    let bounds = if f_lo <= f_hi {
+        Bounds::tested(f_lo, f_hi)
+    } else {
+        // No sine: the holds and ramps see 0.001 to 10 Hz.
+        Bounds::tested(0.1, 1.0)
+    };
+    let refined = refine(&stages.initial, &scored, bounds);
     let model_toml = export::toml(&refined.model, &campaign.name, export::demo(&pre));
     let scene = crate::scene::Scene::parse("model.toml", &model_toml)
         .map_err(|e| IdentifyError::Written(e.to_string()))?;

@@ -319,6 +319,7 @@ fn maxwell_fit(points: &[RatePoint], m: usize) -> Vec<(f64, f64)> {
     let problem = RateProblem {
         points: points.to_vec(),
         params: DVector::from_vec(start),
+        ln_w: (a - 100f64.ln(), b + 10f64.ln()),
     };
     let (solved, _) = LevenbergMarquardt::new().minimize(problem);
     let mut cells: Vec<(f64, f64)> = solved
@@ -336,7 +337,15 @@ fn maxwell_fit(points: &[RatePoint], m: usize) -> Vec<(f64, f64)> {
 struct RateProblem {
     points: Vec<RatePoint>,
     params: DVector<f64>,
+    /// The box of ln ω: two decades below the lowest tested frequency,
+    /// one above the highest. A corner outside it, or a ratio r above
+    /// [`MAX_RATIO`], costs a residual (a cell far above the band with a
+    /// huge r changes nothing tested but would empty g⁰).
+    ln_w: (f64, f64),
 }
+
+/// Largest g_i / g⁰ of a Maxwell cell from the stage.
+const MAX_RATIO: f64 = 10.0;
 
 impl RateProblem {
     fn cells(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
@@ -361,7 +370,7 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for RateProblem {
     }
 
     fn residuals(&self) -> Option<DVector<f64>> {
-        let mut r = DVector::zeros(2 * self.points.len());
+        let mut r = DVector::zeros(2 * self.points.len() + self.params.len());
         for (k, p) in self.points.iter().enumerate() {
             let w = TAU * p.frequency_hz;
             let (s, l) = self.cells().fold((0.0, 0.0), |(s, l), (wi, ri)| {
@@ -371,12 +380,28 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for RateProblem {
             r[2 * k] = s - p.storage;
             r[2 * k + 1] = l - p.loss;
         }
+        let base = 2 * self.points.len();
+        for (i, c) in self.params.as_slice().chunks_exact(2).enumerate() {
+            r[base + 2 * i] = (c[0] - self.ln_w.1).max(0.0) + (self.ln_w.0 - c[0]).max(0.0);
+            r[base + 2 * i + 1] = (c[1] - MAX_RATIO.ln()).max(0.0);
+        }
         r.iter().all(|v| v.is_finite()).then_some(r)
     }
 
     fn jacobian(&self) -> Option<DMatrix<f64>> {
         let n = self.params.len();
-        let mut j = DMatrix::zeros(2 * self.points.len(), n);
+        let mut j = DMatrix::zeros(2 * self.points.len() + n, n);
+        let base = 2 * self.points.len();
+        for (i, c) in self.params.as_slice().chunks_exact(2).enumerate() {
+            j[(base + 2 * i, 2 * i)] = if c[0] > self.ln_w.1 {
+                1.0
+            } else if c[0] < self.ln_w.0 {
+                -1.0
+            } else {
+                0.0
+            };
+            j[(base + 2 * i + 1, 2 * i + 1)] = if c[1] > MAX_RATIO.ln() { 1.0 } else { 0.0 };
+        }
         for (k, p) in self.points.iter().enumerate() {
             let w = TAU * p.frequency_hz;
             for (i, (wi, ri)) in self.cells().enumerate() {
@@ -417,6 +442,11 @@ mod tests {
             })
             .collect();
         let fitted = maxwell_fit(&points, 3);
+        assert!(
+            fitted
+                .iter()
+                .all(|c| c.0 > 0.1 / 100.0 && c.0 < 100.0 * 10.0)
+        );
         for (got, want) in fitted.iter().zip(&cells) {
             assert!((got.0 / want.0 - 1.0).abs() < 1e-3, "{fitted:?}");
             assert!((got.1 / want.1 - 1.0).abs() < 1e-3, "{fitted:?}");

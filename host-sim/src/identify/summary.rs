@@ -330,61 +330,80 @@ pub fn figures(id: &Identification) -> Vec<(String, String)> {
     out.push(("residual.svg".into(), render_panels(&[residual])));
     let all: Vec<TestFit> = id.fitted.iter().chain(&id.held_out).cloned().collect();
     if all.iter().any(|t| t.sine.is_some()) {
-        let by_a = sine_groups(&all, |p| (p.amplitude_mm * 1e3).round() as i64);
-        let panel = |title: &str, y: &str, value: fn(&SinePoint) -> f64| {
-            let mut plot = Plot::new(title, "frequency f [Hz]", y);
-            plot.x_log = true;
-            for (a, v) in &by_a {
-                let mut v = v.clone();
-                v.sort_by(|x, y| x.0.frequency_hz.total_cmp(&y.0.frequency_hz));
-                let label = format!("{} mm", *a as f64 / 1e3);
-                plot.series.push(Series::markers(
-                    format!("{label} measured"),
-                    v.iter().map(|(m, _)| (m.frequency_hz, value(m))).collect(),
-                ));
-                plot.series.push(Series::line(
-                    format!("{label} identified"),
-                    v.iter().map(|(m, p)| (m.frequency_hz, value(p))).collect(),
-                ));
-            }
-            plot
-        };
         out.push((
             "identified-modulus-frequency.svg".into(),
-            render_panels(&[
-                panel("Storage modulus K′", "K′ [N/mm]", |p| p.storage),
-                panel("Loss modulus K″", "K″ [N/mm]", |p| p.loss),
-                panel("Loss factor", "K″ / K′", |p| p.loss_factor),
-            ]),
+            render_panels(&sine_panels(
+                &all,
+                true,
+                &[
+                    ("Storage modulus K′", "K′ [N/mm]", |p| p.storage),
+                    ("Loss modulus K″", "K″ [N/mm]", |p| p.loss),
+                    ("Loss factor", "K″ / K′", |p| p.loss_factor),
+                ],
+            )),
         ));
-        let by_f = sine_groups(&all, |p| (p.frequency_hz * 1e3).round() as i64);
-        let panel = |title: &str, y: &str, value: fn(&SinePoint) -> f64| {
-            let mut plot = Plot::new(title, "amplitude X [mm]", y);
-            plot.x_log = true;
-            for (f, v) in &by_f {
-                let mut v = v.clone();
-                v.sort_by(|x, y| x.0.amplitude_mm.total_cmp(&y.0.amplitude_mm));
-                let label = format!("{} Hz", *f as f64 / 1e3);
-                plot.series.push(Series::markers(
-                    format!("{label} measured"),
-                    v.iter().map(|(m, _)| (m.amplitude_mm, value(m))).collect(),
-                ));
-                plot.series.push(Series::line(
-                    format!("{label} identified"),
-                    v.iter().map(|(m, p)| (m.amplitude_mm, value(p))).collect(),
-                ));
-            }
-            plot
-        };
         out.push((
             "identified-modulus-amplitude.svg".into(),
-            render_panels(&[
-                panel("Secant modulus (eq 3.5)", "K_s [N/mm]", |p| p.secant),
-                panel("Loss factor", "K″ / K′", |p| p.loss_factor),
-            ]),
+            render_panels(&sine_panels(
+                &all,
+                false,
+                &[
+                    ("Secant modulus (eq 3.5)", "K_s [N/mm]", |p| p.secant),
+                    ("Loss factor", "K″ / K′", |p| p.loss_factor),
+                ],
+            )),
         ));
     }
     out
+}
+
+/// A quantity read from a sine's first harmonic.
+type Quantity = fn(&SinePoint) -> f64;
+/// A panel: title, y label and the quantity.
+type Panel<'a> = (&'a str, &'a str, Quantity);
+
+/// A sine quantity of the zero-preload sines against frequency, one
+/// series per amplitude (`against_frequency`), or against amplitude, one
+/// per frequency: measured markers and identified lines, a panel per
+/// `(title, y label, value)`.
+fn sine_panels(all: &[TestFit], against_frequency: bool, panels: &[Panel<'_>]) -> Vec<Plot> {
+    let (x_of, group_of, x_label, unit): (Quantity, Quantity, _, _) = if against_frequency {
+        (
+            |p| p.frequency_hz,
+            |p| p.amplitude_mm,
+            "frequency f [Hz]",
+            "mm",
+        )
+    } else {
+        (
+            |p| p.amplitude_mm,
+            |p| p.frequency_hz,
+            "amplitude X [mm]",
+            "Hz",
+        )
+    };
+    let groups = sine_groups(all, |p| (group_of(p) * 1e3).round() as i64);
+    panels
+        .iter()
+        .map(|&(title, y, value)| {
+            let mut plot = Plot::new(title, x_label, y);
+            plot.x_log = true;
+            for (key, v) in &groups {
+                let mut v = v.clone();
+                v.sort_by(|a, b| x_of(&a.0).total_cmp(&x_of(&b.0)));
+                let label = format!("{} {unit}", *key as f64 / 1e3);
+                plot.series.push(Series::markers(
+                    format!("{label} measured"),
+                    v.iter().map(|(m, _)| (x_of(m), value(m))).collect(),
+                ));
+                plot.series.push(Series::line(
+                    format!("{label} identified"),
+                    v.iter().map(|(m, p)| (x_of(m), value(p))).collect(),
+                ));
+            }
+            plot
+        })
+        .collect()
 }
 
 /// Writes the model files, `report.md` and the figures into `out`.

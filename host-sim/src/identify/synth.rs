@@ -45,6 +45,21 @@ pub enum Shape {
         /// Whole cycles.
         cycles: u32,
     },
+    /// Band-limited random displacement (test kind `other`): 32 sines at
+    /// log-spaced frequencies over the band with seeded random phases,
+    /// faded in over its first 2 s from rest at 0.
+    Random {
+        /// Lowest frequency, Hz.
+        f_lo_hz: f64,
+        /// Highest frequency, Hz.
+        f_hi_hz: f64,
+        /// RMS displacement once faded in, mm.
+        rms_mm: f64,
+        /// Duration, s.
+        duration_s: f64,
+        /// Seed of the phases.
+        seed: u64,
+    },
     /// A sine about a preload.
     Sine {
         /// Frequency, Hz.
@@ -65,6 +80,8 @@ pub const RAMP_S: f64 = 20.0;
 pub const PRELOAD_S: f64 = 20.0;
 /// Model steps per sample.
 const SUBSTEPS: usize = 4;
+/// Tones of a random displacement.
+const RANDOM_TONES: usize = 32;
 
 impl Shape {
     /// The test's name in the campaign.
@@ -83,6 +100,12 @@ impl Shape {
                 preload_mm,
                 ..
             } => format!("sine-{frequency_hz}-{preload_mm}-{amplitude_mm}"),
+            Self::Random {
+                f_hi_hz,
+                rms_mm,
+                seed,
+                ..
+            } => format!("random-{f_hi_hz}-{rms_mm}-{seed}"),
         }
     }
 
@@ -91,6 +114,7 @@ impl Shape {
             Self::MultiStep { .. } => Kind::MultiStep,
             Self::Triangle { .. } => Kind::Triangle,
             Self::Sine { .. } => Kind::Sine,
+            Self::Random { .. } => Kind::Other,
         }
     }
 
@@ -109,6 +133,7 @@ impl Shape {
                 cycles,
                 ..
             } => f64::from(*cycles) / frequency_hz + self.lead(),
+            Self::Random { duration_s, .. } => *duration_s,
         }
     }
 
@@ -147,6 +172,7 @@ impl Shape {
                 speed_mm_per_min, ..
             } => 0.3 * speed_mm_per_min,
             Self::Sine { frequency_hz, .. } => 50.0 * frequency_hz,
+            Self::Random { f_hi_hz, .. } => 50.0 * f_hi_hz,
         }
     }
 
@@ -197,6 +223,24 @@ impl Shape {
                 // The preload reached over the first half of its settling.
                 let ramp = (2.0 * t / PRELOAD_S).min(1.0);
                 preload_mm * ramp + amplitude_mm * (TAU * frequency_hz * t).sin()
+            }
+            Self::Random {
+                f_lo_hz,
+                f_hi_hz,
+                rms_mm,
+                seed,
+                ..
+            } => {
+                let mut phases = Noise::new(*seed);
+                let a = rms_mm * (2.0 / RANDOM_TONES as f64).sqrt();
+                let ratio = f_hi_hz / f_lo_hz;
+                let sum: f64 = (0..RANDOM_TONES)
+                    .map(|k| {
+                        let f = f_lo_hz * ratio.powf(k as f64 / (RANDOM_TONES - 1) as f64);
+                        (TAU * f * t + TAU * phases.uniform()).sin()
+                    })
+                    .sum();
+                (t / 2.0).min(1.0) * a * sum
             }
         }
     }
@@ -357,7 +401,7 @@ pub fn write(
             shape.kind().name()
         ));
         match shape {
-            Shape::MultiStep { .. } => {}
+            Shape::MultiStep { .. } | Shape::Random { .. } => {}
             Shape::Triangle {
                 speed_mm_per_min,
                 amplitude_mm,
