@@ -32,6 +32,7 @@ fn grid() -> Vec<Shape> {
             amplitude_mm: a,
             preload_mm: 0.0,
             cycles: 3,
+            samples_per_mm: bushing_sim::identify::synth::PART_SAMPLES_PER_MM,
         });
     }
     for f in [0.1, 0.5, 1.0, 5.0, 10.0, 50.0] {

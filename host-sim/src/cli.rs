@@ -196,9 +196,22 @@ pub struct CampaignArgs {
     /// Hold of each multi-step level, s (Table B.2: 3600).
     #[arg(long, default_value_t = 3600.0)]
     pub hold_s: f64,
-    /// Preloads of the sines, mm (Table B.2: 0,1,2,3).
+    /// Preloads of the sines, mm (Table B.2: 0,1,2,3; part grid only).
     #[arg(long, value_delimiter = ',', default_value = "0,1,2,3")]
     pub preloads: Vec<f64>,
+    /// The grid: the part tests of Table B.2, or the shear-specimen tests
+    /// of Table B.1 in strain (with --hold-s 360 as in the table).
+    #[arg(long, value_enum, default_value = "part")]
+    pub grid: Grid,
+}
+
+/// The test grids of seed 000 Appendix B.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Grid {
+    /// Table B.2: individual part tests, mm.
+    Part,
+    /// Table B.1: shear specimen tests, strain (1.0 = 100 %).
+    SpecimenShear,
 }
 
 /// `run`.
@@ -616,7 +629,10 @@ fn campaign(a: &CampaignArgs) -> Result<(), CliError> {
             "--preloads: {p} mm must be finite and within 100 mm"
         )));
     }
-    let grid = synth::part_grid(a.hold_s, &a.preloads);
+    let grid = match a.grid {
+        Grid::Part => synth::part_grid(a.hold_s, &a.preloads),
+        Grid::SpecimenShear => synth::specimen_shear_grid(a.hold_s),
+    };
     let mut staged = Staged::begin(&a.out)?;
     let samples =
         synth::write(&scene, &grid, a.noise, a.seed, &mut staged).map_err(|e| match e {

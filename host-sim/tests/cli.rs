@@ -854,3 +854,37 @@ fn identify_writes_a_runnable_model_and_its_report() {
         .stderr(predicate::str::contains("--hold-out no-such-test"));
     assert!(!refused.exists());
 }
+
+/// `campaign --grid specimen-shear` writes the shear-specimen grid of
+/// Table B.1 (a multi-step test of 10 levels, 5 triangle tests, 117
+/// sines), in strain.
+#[test]
+fn campaign_writes_the_specimen_grid_on_request() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("specimen");
+    sim()
+        .args([
+            "campaign",
+            "scenes/seed000/m1-shear-sine-low.toml",
+            "--grid",
+            "specimen-shear",
+            "--hold-s",
+            "30",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .code(0)
+        .stdout(predicate::str::starts_with("campaign: 123 tests, "));
+    let c = bushing_sim::identify::campaign::Campaign::load(&out, true).unwrap();
+    assert_eq!((c.tests.len(), c.excluded.len()), (123, 0));
+    let largest = c
+        .tests
+        .iter()
+        .flat_map(|t| t.record.x.iter())
+        .fold(0.0f64, |m, &x| m.max(x.abs()));
+    assert!(
+        (largest - 1.0).abs() < 1e-9,
+        "the largest strain is the 100 % hold: {largest}"
+    );
+}

@@ -413,6 +413,7 @@ fn triangle_branches_show_each_cell_slipping_at_twice_its_distance() {
             amplitude_mm: 4.0,
             preload_mm: 0.0,
             cycles: 3,
+            samples_per_mm: bushing_sim::identify::synth::PART_SAMPLES_PER_MM,
         },
         Kind::Triangle,
     );
@@ -454,6 +455,7 @@ fn triangle_branches_show_each_cell_slipping_at_twice_its_distance() {
             amplitude_mm: 0.05,
             preload_mm: 0.0,
             cycles: 3,
+            samples_per_mm: bushing_sim::identify::synth::PART_SAMPLES_PER_MM,
         },
         Kind::Triangle,
     );
@@ -489,6 +491,7 @@ fn the_triangle_midline_is_the_long_term_backbone() {
                     amplitude_mm: a,
                     preload_mm: p,
                     cycles: 2,
+                    samples_per_mm: bushing_sim::identify::synth::PART_SAMPLES_PER_MM,
                 },
                 Kind::Triangle,
             );
@@ -546,13 +549,19 @@ fn jenkins_cells_are_placed_back_on_the_normalised_curve() {
                     amplitude_mm: 4.0,
                     preload_mm: 0.0,
                     cycles: 2,
+                    samples_per_mm: bushing_sim::identify::synth::PART_SAMPLES_PER_MM,
                 },
                 Kind::Triangle,
             );
             branches(&t).unwrap()
         })
         .collect();
-    let curve = normalised(&triangles, |_| 50.0, (-10.0, 10.0));
+    let curve = normalised(
+        &triangles,
+        |_| 50.0,
+        (-10.0, 10.0),
+        bushing_sim::identify::hysteresis::BIN_MM,
+    );
     let cells = place(&curve, 2, 0.15).unwrap();
     println!("placed: {cells:?}");
     assert_eq!(cells.len(), 2);

@@ -12,7 +12,8 @@
 
 use super::triangle::Triangles;
 
-/// Width of the distance bins the curve is averaged over, mm.
+/// Width of the distance bins the curve is averaged over on a part (its
+/// largest triangle 4.5 mm), mm; [`super::report::Scale`] scales it.
 pub const BIN_MM: f64 = 0.02;
 
 /// One placed cell.
@@ -28,12 +29,13 @@ pub struct Placed {
 /// The normalised curve `(d, K_inst / K_long(x))` of every reversal
 /// branch (the first loading left out), `long_term_modulus(x)` giving the
 /// long-term modulus g⁰ K^∞(x) in N/mm where it is known, for x in
-/// `known` (mm; points elsewhere are left out); binned every [`BIN_MM`]
-/// as `(bin centre, mean, count)`.
+/// `known` (mm; points elsewhere are left out); binned every `bin_mm` (on
+/// a part [`BIN_MM`]) as `(bin centre, mean, count)`.
 pub fn normalised(
     triangles: &[Triangles],
     long_term_modulus: impl Fn(f64) -> f64,
     known: (f64, f64),
+    bin_mm: f64,
 ) -> Vec<(f64, f64, usize)> {
     let mut bins: Vec<(f64, usize)> = Vec::new();
     for t in triangles {
@@ -50,7 +52,7 @@ pub fn normalised(
                 if !(r.is_finite() && d >= 0.0) {
                     continue;
                 }
-                let bin = (d / BIN_MM) as usize;
+                let bin = (d / bin_mm) as usize;
                 if bins.len() <= bin {
                     bins.resize(bin + 1, (0.0, 0));
                 }
@@ -62,7 +64,7 @@ pub fn normalised(
     bins.iter()
         .enumerate()
         .filter(|(_, b)| b.1 > 0)
-        .map(|(i, b)| ((i as f64 + 0.5) * BIN_MM, b.0 / b.1 as f64, b.1))
+        .map(|(i, b)| ((i as f64 + 0.5) * bin_mm, b.0 / b.1 as f64, b.1))
         .collect()
 }
 

@@ -42,6 +42,8 @@ pub struct Preprocessed {
     pub normalised: Vec<(f64, f64, usize)>,
     /// [`JENKINS_CELLS`] Jenkins cells placed on it (the second stage).
     pub jenkins: Option<Vec<Placed>>,
+    /// The lengths of the analysis, scaled to the largest triangle.
+    pub scale: Scale,
     /// Every test left out, when reading or here, with its reason.
     pub excluded: Vec<Excluded>,
 }
@@ -60,6 +62,7 @@ pub fn preprocess(campaign: &Campaign) -> Preprocessed {
         normalised: Vec::new(),
         jenkins: None,
         excluded: campaign.excluded.clone(),
+        scale: Scale::of(PART_LARGEST_MM),
     };
     for t in &campaign.tests {
         let name = t.name.clone();
@@ -77,7 +80,12 @@ pub fn preprocess(campaign: &Campaign) -> Preprocessed {
         }
     }
     let triangles: Vec<_> = p.triangles.iter().map(|(_, t)| t.clone()).collect();
-    p.midline = midline(&triangles, PART_THRESHOLD_MM, MIDLINE_STEP_MM);
+    let largest = triangles.iter().map(|t| t.amplitude_mm).fold(0.0, f64::max);
+    if largest > 0.0 {
+        p.scale = Scale::of(largest);
+    }
+    let sc = p.scale;
+    p.midline = midline(&triangles, sc.threshold_mm, sc.step_mm);
     p.long_term = knots(&p.midline, LONG_TERM_KNOTS);
     if let Some((xs, fs)) = &p.long_term
         && let Ok(spline) = bushing::MonotoneSpline::<f64, LONG_TERM_KNOTS>::new(xs, fs)
@@ -85,10 +93,44 @@ pub fn preprocess(campaign: &Campaign) -> Preprocessed {
         use bushing::Backbone;
         // Only where the knots say what the long-term modulus is.
         let known = (xs[0], xs[xs.len() - 1]);
-        p.normalised = normalised(&triangles, |x| spline.eval(x).1, known);
-        p.jenkins = place(&p.normalised, JENKINS_CELLS, FILTER_START_MM);
+        p.normalised = normalised(&triangles, |x| spline.eval(x).1, known, sc.bin_mm);
+        p.jenkins = place(&p.normalised, JENKINS_CELLS, sc.filter_start_mm);
     }
     p
+}
+
+/// The lengths the analysis of triangles uses, in proportion to the
+/// campaign's largest triangle amplitude L: on a part (L = 4.5 mm, Table
+/// B.2) they are [`PART_THRESHOLD_MM`], [`MIDLINE_STEP_MM`],
+/// [`FILTER_START_MM`] and [`super::hysteresis::BIN_MM`]; on a specimen
+/// in strain they shrink with its amplitudes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scale {
+    /// Distance from the turning points past which the midline is the
+    /// long-term backbone (L / 3).
+    pub threshold_mm: f64,
+    /// Spacing of the midline points (L / 90).
+    pub step_mm: f64,
+    /// Distance after a turning point the filtered curve needs (L / 30).
+    pub filter_start_mm: f64,
+    /// Width of the distance bins of the normalised curve (L / 225).
+    pub bin_mm: f64,
+}
+
+/// The largest triangle amplitude of the part grids, mm.
+pub const PART_LARGEST_MM: f64 = 4.5;
+
+impl Scale {
+    /// The lengths for a largest triangle amplitude `largest_mm`.
+    pub fn of(largest_mm: f64) -> Self {
+        let r = largest_mm / PART_LARGEST_MM;
+        Self {
+            threshold_mm: PART_THRESHOLD_MM * r,
+            step_mm: MIDLINE_STEP_MM * r,
+            filter_start_mm: FILTER_START_MM * r,
+            bin_mm: super::hysteresis::BIN_MM * r,
+        }
+    }
 }
 
 /// Jenkins cells placed by the second stage (the seed's graphical
@@ -244,9 +286,10 @@ impl Preprocessed {
                 s,
                 "## Long-term backbone (first stage)\n\n\
                  The mean of each loading and unloading branch at the same displacement, \
-                 farther than {PART_THRESHOLD_MM} mm from their turning points (§3.4), keeps \
+                 farther than {} mm from their turning points (§3.4), keeps \
                  the long-term force g⁰ F^∞(x) alone: {} points over [{:.3}, {:.3}] mm. \
                  Figure: `long-term-backbone.svg`.\n",
+                g(self.scale.threshold_mm),
                 self.midline.len(),
                 self.midline[0].0,
                 self.midline[self.midline.len() - 1].0
@@ -270,10 +313,11 @@ impl Preprocessed {
                  The instantaneous modulus over the long-term modulus of the knots' spline at \
                  the same x, binned every {} mm, is a staircase `1 + Σ g_j / g⁰` whose steps \
                  sit where the cells slip; {JENKINS_CELLS} steps fitted by least squares \
-                 (bins within {FILTER_START_MM} mm of a turning point left out). On a linear \
+                 (bins within {} mm of a turning point left out). On a linear \
                  backbone a cell slips at twice its slip distance x_f. Figure: \
                  `normalised-modulus.svg`.\n",
-                super::hysteresis::BIN_MM
+                g(self.scale.bin_mm),
+                g(self.scale.filter_start_mm)
             );
             let mut t = Table::new(["slips at [mm]", "x_f on a linear backbone [mm]", "g_j / g⁰"]);
             for c in cells {

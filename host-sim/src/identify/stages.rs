@@ -30,7 +30,7 @@ use super::campaign::{Campaign, Test};
 use super::class::{BackboneForm, Candidate, HysteresisForm, ModelClass};
 use super::hysteresis::{Placed, place};
 use super::replay::Drive;
-use super::report::{FILTER_START_MM, Preprocessed};
+use super::report::Preprocessed;
 use super::sine::{SinePoint, first_harmonic};
 use crate::family::backbone::BackboneSpec;
 
@@ -134,13 +134,16 @@ pub fn stages(
     // Stage 2: hysteresis on the normalised curve.
     let (jenkins, sts) = match class.hysteresis {
         HysteresisForm::Iwan => (
-            place(&p.normalised, class.jenkins_cells, FILTER_START_MM)
+            place(&p.normalised, class.jenkins_cells, p.scale.filter_start_mm)
                 .ok_or(StageError::NoHysteresis("Iwan bank"))?,
             None,
         ),
         HysteresisForm::Sts => (
             Vec::new(),
-            Some(sts_fit(&p.normalised, k_long(0.0)).ok_or(StageError::NoHysteresis("STS law"))?),
+            Some(
+                sts_fit(&p.normalised, k_long(0.0), p.scale.filter_start_mm)
+                    .ok_or(StageError::NoHysteresis("STS law"))?,
+            ),
         ),
         HysteresisForm::None => (Vec::new(), None),
     };
@@ -251,10 +254,10 @@ fn scaled_backbone(
 /// The STS law `(C, K_1)` fitted to the normalised curve: the added
 /// stiffness `K_f(d) = (R(d) − 1) K_long(0)` matched in least squares
 /// over a logarithmic grid of C and K_1 around the curve's own scales.
-fn sts_fit(curve: &[(f64, f64, usize)], k_long: f64) -> Option<(f64, f64)> {
+fn sts_fit(curve: &[(f64, f64, usize)], k_long: f64, from_mm: f64) -> Option<(f64, f64)> {
     let pts: Vec<(f64, f64)> = curve
         .iter()
-        .filter(|b| b.0 >= FILTER_START_MM)
+        .filter(|b| b.0 >= from_mm)
         .map(|b| (b.0, ((b.1 - 1.0) * k_long).max(0.0)))
         .collect();
     let &(d0, k0) = pts.first()?;
@@ -420,6 +423,7 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for RateProblem {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::identify::report::FILTER_START_MM;
 
     #[test]
     fn the_maxwell_stage_recovers_cells_from_their_rate_points() {
@@ -466,7 +470,7 @@ mod tests {
                 )
             })
             .collect();
-        let (cf, kf) = sts_fit(&curve, k_long).unwrap();
+        let (cf, kf) = sts_fit(&curve, k_long, FILTER_START_MM).unwrap();
         // C within the grid's resolution (a tenth of a decade). Past the
         // filter's start-up (0.15 mm) K_1 barely shows (the law is
         // sqrt(C / 2d) there), so the fitted law is checked on the curve.

@@ -44,6 +44,9 @@ pub enum Shape {
         preload_mm: f64,
         /// Whole cycles.
         cycles: u32,
+        /// Samples per mm of travel (the seed's machine: 18, see
+        /// [`PART_SAMPLES_PER_MM`]).
+        samples_per_mm: f64,
     },
     /// Band-limited random displacement (test kind `other`): 32 sines at
     /// log-spaced frequencies over the band with seeded random phases,
@@ -80,6 +83,9 @@ pub const RAMP_S: f64 = 20.0;
 pub const PRELOAD_S: f64 = 20.0;
 /// Model steps per sample.
 const SUBSTEPS: usize = 4;
+/// Samples per mm of a triangle on the seed's machine: 3 Hz at 10 mm/min,
+/// 0.3 Hz at 1 mm/min (§3.2.3).
+pub const PART_SAMPLES_PER_MM: f64 = 18.0;
 /// Tones of a random displacement.
 const RANDOM_TONES: usize = 32;
 
@@ -167,10 +173,11 @@ impl Shape {
                     1.0
                 }
             }
-            // 3 Hz at 10 mm/min, 0.3 Hz at 1 mm/min: 18 samples per mm.
             Self::Triangle {
-                speed_mm_per_min, ..
-            } => 0.3 * speed_mm_per_min,
+                speed_mm_per_min,
+                samples_per_mm,
+                ..
+            } => samples_per_mm * speed_mm_per_min / 60.0,
             Self::Sine { frequency_hz, .. } => 50.0 * frequency_hz,
             Self::Random { f_hi_hz, .. } => 50.0 * f_hi_hz,
         }
@@ -263,6 +270,7 @@ pub fn part_grid(hold_s: f64, preloads: &[f64]) -> Vec<Shape> {
                 amplitude_mm: a,
                 preload_mm: 0.0,
                 cycles: 3,
+                samples_per_mm: PART_SAMPLES_PER_MM,
             });
         }
         for p in [1.0, 2.0, 3.0, 4.0] {
@@ -271,6 +279,7 @@ pub fn part_grid(hold_s: f64, preloads: &[f64]) -> Vec<Shape> {
                 amplitude_mm: 1.0,
                 preload_mm: p,
                 cycles: 3,
+                samples_per_mm: PART_SAMPLES_PER_MM,
             });
         }
     }
@@ -283,6 +292,59 @@ pub fn part_grid(hold_s: f64, preloads: &[f64]) -> Vec<Shape> {
                     preload_mm: p,
                     cycles: 5,
                 });
+            }
+        }
+    }
+    grid
+}
+
+/// The shear-specimen grids of Table B.1 of seed 000, in strain (a unit
+/// specimen: 1.0 is 100 %): multi-step levels 0.1 to 1.0 held `hold_s`
+/// (360 s in the table); triangles of 0.5 at 1 and 10 per minute about 0
+/// and 0.2, and of 0.9 at 10 per minute, 3 cycles, sampled 90 times per
+/// unit (the machine's 18 samples per mm on a specimen 5 mm thick, an
+/// assumption: the thickness is not given); sines of 5 cycles about the
+/// preloads 0, 0.45 and 0.9, at 0.1 to 10 Hz of 1e-4 to 0.01 and at 50 and
+/// 100 Hz of 1e-4 to 0.1 (the table's amplitudes, see the reference flag
+/// on them).
+pub fn specimen_shear_grid(hold_s: f64) -> Vec<Shape> {
+    let mut grid = vec![Shape::MultiStep {
+        levels: (1..=10).map(|k| 0.1 * f64::from(k)).collect(),
+        hold_s,
+    }];
+    let triangle = |speed, amplitude_mm, preload_mm| Shape::Triangle {
+        speed_mm_per_min: speed,
+        amplitude_mm,
+        preload_mm,
+        cycles: 3,
+        samples_per_mm: 5.0 * PART_SAMPLES_PER_MM,
+    };
+    for speed in [1.0, 10.0] {
+        for p in [0.0, 0.2] {
+            grid.push(triangle(speed, 0.5, p));
+        }
+    }
+    grid.push(triangle(10.0, 0.9, 0.0));
+    for p in [0.0, 0.45, 0.9] {
+        for (frequencies, amplitudes) in [
+            (
+                &[0.1, 0.5, 1.0, 5.0, 10.0][..],
+                &[1e-4, 5e-4, 1e-3, 5e-3, 1e-2][..],
+            ),
+            (
+                &[50.0, 100.0][..],
+                &[1e-4, 5e-4, 1e-3, 5e-3, 1e-2, 5e-2, 0.1][..],
+            ),
+        ] {
+            for &f in frequencies {
+                for &a in amplitudes {
+                    grid.push(Shape::Sine {
+                        frequency_hz: f,
+                        amplitude_mm: a,
+                        preload_mm: p,
+                        cycles: 5,
+                    });
+                }
             }
         }
     }
