@@ -75,11 +75,7 @@ impl Scored {
                 }
             })
             .collect();
-        let (lo, hi) = measured
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &f| {
-                (lo.min(f), hi.max(f))
-            });
+        let (lo, hi) = super::extremes(&measured);
         let range = (hi - lo).max(1e-12);
         Self {
             drive,

@@ -24,3 +24,13 @@ pub mod stages;
 pub mod summary;
 pub mod synth;
 pub mod triangle;
+
+/// The smallest and largest of `values` (`(inf, -inf)` when there are
+/// none).
+pub fn extremes<'a>(values: impl IntoIterator<Item = &'a f64>) -> (f64, f64) {
+    values
+        .into_iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        })
+}

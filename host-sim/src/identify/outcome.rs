@@ -248,12 +248,7 @@ pub fn predict(model: &Model, test: &Test) -> Result<TestFit, TestError> {
         .map_err(|e| TestError::Check(format!("the model cannot be built: {e}")))?
         .ok_or_else(|| TestError::Check("the model refused a step of the record".into()))?;
     let r = &test.record;
-    let (lo, hi) = r
-        .force
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &f| {
-            (lo.min(f), hi.max(f))
-        });
+    let (lo, hi) = super::extremes(&r.force);
     let range = (hi - lo).max(1e-12);
     let n = forces.len().max(1) as f64;
     let rms = (forces

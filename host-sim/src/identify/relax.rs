@@ -41,11 +41,7 @@ pub fn holds(test: &Test) -> Result<Vec<Hold>, TestError> {
         )));
     }
     let r = &test.record;
-    let (lo, hi) =
-        r.x.iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
-                (lo.min(x), hi.max(x))
-            });
+    let (lo, hi) = super::extremes(&r.x);
     let tol = (2e-4 * (hi - lo)).max(1e-6);
     let mut out = Vec::new();
     let mut start = 0;

@@ -16,6 +16,7 @@
 use std::f64::consts::TAU;
 
 use super::campaign::{Kind, Record, Test, TestError};
+use super::extremes;
 use crate::harmonic::{Harmonic, ratio};
 
 /// Fewest samples per period a sine record may have.
@@ -189,13 +190,6 @@ pub fn first_harmonic(test: &Test) -> Result<SinePoint, TestError> {
 
 fn check(message: String) -> TestError {
     TestError::Check(message)
-}
-
-fn extremes(v: &[f64]) -> (f64, f64) {
-    v.iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
-            (lo.min(x), hi.max(x))
-        })
 }
 
 /// The frequency of a record's displacement from its upward crossings of

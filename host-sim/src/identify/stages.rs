@@ -113,13 +113,7 @@ pub fn stages(
     // The knots spread over every displacement the fitted records reach
     // (the midline stops short of the turning points), their forces from
     // the long-term spline, linear beyond its own knots.
-    let (lo, hi) = campaign
-        .tests
-        .iter()
-        .flat_map(|t| t.record.x.iter())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
-            (lo.min(x), hi.max(x))
-        });
+    let (lo, hi) = super::extremes(campaign.tests.iter().flat_map(|t| t.record.x.iter()));
     let n = long_term.0.len().max(count.min(MAX_KNOTS));
     let long_term = if lo < hi {
         let xs: Vec<f64> = (0..n)

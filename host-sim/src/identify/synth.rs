@@ -444,11 +444,7 @@ pub fn write(
     let mut samples = 0;
     for shape in grid {
         let rows = record(scene, shape)?;
-        let (lo, hi) = rows
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
-                (lo.min(r[2]), hi.max(r[2]))
-            });
+        let (lo, hi) = super::extremes(rows.iter().map(|r| &r[2]));
         let sigma = noise * (hi - lo);
         let name = shape.name();
         let mut csv = CsvText::new(["time_s", "x_mm", "force_n"]);

@@ -61,11 +61,7 @@ pub fn branches(test: &Test) -> Result<Triangles, TestError> {
             r.len()
         )));
     }
-    let (lo, hi) =
-        r.x.iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
-                (lo.min(x), hi.max(x))
-            });
+    let (lo, hi) = super::extremes(&r.x);
     let (amplitude, preload) = (0.5 * (hi - lo), 0.5 * (hi + lo));
     let mut speeds: Vec<f64> = r
         .time
