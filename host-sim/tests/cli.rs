@@ -888,3 +888,52 @@ fn campaign_writes_the_specimen_grid_on_request() {
         "the largest strain is the 100 % hold: {largest}"
     );
 }
+
+/// Every option of the model class runs end to end: a polynomial backbone,
+/// the STS law, two Maxwell cells and an x_f cell, written as a scene and
+/// as Rust constructors.
+#[test]
+fn identify_runs_every_model_class_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let campaign = dir.path().join("campaign");
+    small_campaign("examples/identification/truth.toml", &campaign, &[]).code(0);
+    let out = dir.path().join("identified");
+    sim()
+        .arg("identify")
+        .arg(&campaign)
+        .args([
+            "--backbone",
+            "polynomial",
+            "--backbone-size",
+            "5",
+            "--hysteresis",
+            "sts",
+            "--maxwell",
+            "2",
+            "--xf",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .code(0);
+    let toml = std::fs::read_to_string(out.join("model.toml")).unwrap();
+    for part in [
+        "type = \"polynomial\"",
+        "law = \"sts\"",
+        "type = \"xf\"",
+        "type = \"maxwell\"",
+    ] {
+        assert!(toml.contains(part), "{part} not in model.toml");
+    }
+    let scene = bushing_sim::Scene::parse("model.toml", &toml).unwrap();
+    assert_eq!(scene.effects().len(), 3);
+    let rust = std::fs::read_to_string(out.join("model.rs")).unwrap();
+    for part in [
+        "Polynomial<T, 6>",
+        "TurningPoints<Sts<T>, 32>",
+        "XfBank<T, 1>",
+        "MaxwellBank<T, 2>",
+    ] {
+        assert!(rust.contains(part), "{part} not in model.rs");
+    }
+}

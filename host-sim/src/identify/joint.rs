@@ -32,7 +32,7 @@ use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use super::campaign::{Kind, Test, TestError};
 use super::class::Candidate;
 use super::replay::Drive;
-use super::sine::first_harmonic;
+use super::sine::{first_harmonic, model_harmonic};
 
 /// Samples of a test the objective reads.
 pub const MAX_SCORED: usize = 400;
@@ -112,7 +112,7 @@ impl Scored {
             let on_model = forces.and_then(|f| {
                 let mut t = test.clone();
                 t.record.force = f.to_vec();
-                first_harmonic(&t).ok()
+                model_harmonic(&t).ok()
             });
             out.push(on_model.map_or(REFUSED, |p| ENERGY_WEIGHT * (p.energy_per_cycle / w - 1.0)));
         }
@@ -244,11 +244,13 @@ pub struct Bounds {
 
 impl Bounds {
     /// Two decades below the lowest tested frequency (a relaxation test
-    /// sees slow cells) and one above the highest, g⁰ of at least 0.02.
+    /// sees slow cells) and two above the highest (a broad relaxation
+    /// spectrum, a fractional one, wants a stiff cell there), g⁰ of at
+    /// least 0.02.
     pub fn tested(f_lo_hz: f64, f_hi_hz: f64) -> Self {
         Self {
             f_lo_hz: f_lo_hz / 100.0,
-            f_hi_hz: f_hi_hz * 10.0,
+            f_hi_hz: f_hi_hz * 100.0,
             g0_min: 0.02,
         }
     }

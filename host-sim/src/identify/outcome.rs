@@ -12,7 +12,7 @@ use super::joint::{Bounds, Refined, Scored, refine};
 use super::relax::holds;
 use super::replay::{Drive, Model};
 use super::report::{Preprocessed, preprocess};
-use super::sine::{SinePoint, first_harmonic};
+use super::sine::{SinePoint, first_harmonic, model_harmonic};
 use super::stages::{StageError, Stages, stages};
 
 /// A test replayed on the identified model.
@@ -265,7 +265,7 @@ pub fn predict(model: &Model, test: &Test) -> Result<TestFit, TestError> {
         .then(|| {
             first_harmonic(test)
                 .ok()
-                .zip(first_harmonic(&on_model).ok())
+                .zip(model_harmonic(&on_model).ok())
         })
         .flatten();
     let hold_ends = (test.kind == Kind::MultiStep)

@@ -31,7 +31,7 @@ use super::class::{BackboneForm, Candidate, HysteresisForm, ModelClass};
 use super::hysteresis::{Placed, place};
 use super::replay::Drive;
 use super::report::Preprocessed;
-use super::sine::{SinePoint, first_harmonic};
+use super::sine::{SinePoint, model_harmonic};
 use crate::family::backbone::BackboneSpec;
 
 /// Why the stages could not give a starting model.
@@ -209,7 +209,7 @@ fn slow_harmonic(test: &Test, slow: &super::replay::Model) -> Option<SinePoint> 
     let forces = Drive::new(test).ok()?.run(slow).ok()??;
     let mut t = test.clone();
     t.record.force = forces;
-    first_harmonic(&t).ok()
+    model_harmonic(&t).ok()
 }
 
 /// F^∞ from the long-term knots times `scale` (1 / g⁰): the knots
@@ -255,10 +255,15 @@ fn sts_fit(curve: &[(f64, f64, usize)], k_long: f64, from_mm: f64) -> Option<(f6
         .map(|b| (b.0, ((b.1 - 1.0) * k_long).max(0.0)))
         .collect();
     let &(d0, k0) = pts.first()?;
-    let &(dm, km) = pts.get(pts.len() / 2)?;
-    if !(k0 > 0.0 && km > 0.0) {
+    if k0 <= 0.0 {
         return None;
     }
+    // Where the added stiffness has fallen to half (the curve's own
+    // scale), or its last positive point.
+    let &(dm, km) = pts
+        .iter()
+        .find(|p| p.1 > 0.0 && p.1 <= 0.5 * k0)
+        .or_else(|| pts.iter().rev().find(|p| p.1 > 0.0))?;
     let c_mid = 2.0 * dm * km * km;
     let k_mid = k0 * (1.0 + d0);
     let mut best = (f64::INFINITY, (c_mid, k_mid));
