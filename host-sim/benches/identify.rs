@@ -35,16 +35,12 @@ fn grid() -> Vec<Shape> {
             samples_per_mm: bushing_sim::identify::synth::PART_SAMPLES_PER_MM,
         });
     }
-    for f in [0.1, 0.5, 1.0, 5.0, 10.0, 50.0] {
-        for a in [0.05, 0.1, 0.25, 0.5, 0.75, 1.0] {
-            grid.push(Shape::Sine {
-                frequency_hz: f,
-                amplitude_mm: a,
-                preload_mm: 0.0,
-                cycles: 533,
-            });
-        }
-    }
+    grid.extend(Shape::sines(
+        &[0.1, 0.5, 1.0, 5.0, 10.0, 50.0],
+        &[0.05, 0.1, 0.25, 0.5, 0.75, 1.0],
+        0.0,
+        533,
+    ));
     grid
 }
 

@@ -90,6 +90,27 @@ pub const PART_SAMPLES_PER_MM: f64 = 18.0;
 const RANDOM_TONES: usize = 32;
 
 impl Shape {
+    /// A sine of `cycles` cycles about `preload_mm` at each frequency (Hz)
+    /// and each amplitude (mm), amplitudes swept at each frequency.
+    pub fn sines(
+        frequencies_hz: &[f64],
+        amplitudes_mm: &[f64],
+        preload_mm: f64,
+        cycles: u32,
+    ) -> Vec<Self> {
+        frequencies_hz
+            .iter()
+            .flat_map(|&frequency_hz| {
+                amplitudes_mm.iter().map(move |&amplitude_mm| Self::Sine {
+                    frequency_hz,
+                    amplitude_mm,
+                    preload_mm,
+                    cycles,
+                })
+            })
+            .collect()
+    }
+
     /// The test's name in the campaign.
     pub fn name(&self) -> String {
         match self {
@@ -284,16 +305,12 @@ pub fn part_grid(hold_s: f64, preloads: &[f64]) -> Vec<Shape> {
         }
     }
     for &p in preloads {
-        for f in [0.1, 0.5, 1.0, 5.0, 10.0, 50.0, 100.0] {
-            for a in [0.05, 0.1, 0.25, 0.5, 1.0] {
-                grid.push(Shape::Sine {
-                    frequency_hz: f,
-                    amplitude_mm: a,
-                    preload_mm: p,
-                    cycles: 5,
-                });
-            }
-        }
+        grid.extend(Shape::sines(
+            &[0.1, 0.5, 1.0, 5.0, 10.0, 50.0, 100.0],
+            &[0.05, 0.1, 0.25, 0.5, 1.0],
+            p,
+            5,
+        ));
     }
     grid
 }
@@ -336,16 +353,7 @@ pub fn specimen_shear_grid(hold_s: f64) -> Vec<Shape> {
                 &[1e-4, 5e-4, 1e-3, 5e-3, 1e-2, 5e-2, 0.1][..],
             ),
         ] {
-            for &f in frequencies {
-                for &a in amplitudes {
-                    grid.push(Shape::Sine {
-                        frequency_hz: f,
-                        amplitude_mm: a,
-                        preload_mm: p,
-                        cycles: 5,
-                    });
-                }
-            }
+            grid.extend(Shape::sines(frequencies, amplitudes, p, 5));
         }
     }
     grid
