@@ -9,7 +9,7 @@
 use std::path::Path;
 
 use bushing_sim::Scene;
-use bushing_sim::identify::campaign::Campaign;
+use bushing_sim::identify::campaign::{Campaign, DEFAULT_PRELOAD_HOLD_S};
 use bushing_sim::identify::class::ModelClass;
 use bushing_sim::identify::outcome::identify;
 use bushing_sim::identify::synth::{self, Shape};
@@ -53,7 +53,15 @@ fn forty_tests_a_million_samples(bencher: Bencher<'_, '_>) {
     let dir = tempfile::tempdir().expect("a temporary folder");
     let out = dir.path().join("campaign");
     let mut staged = Staged::begin(&out).expect("a staged folder");
-    let samples = synth::write(&truth, &grid(), 0.005, 1, &mut staged).expect("the campaign");
+    let samples = synth::write(
+        &truth,
+        &grid(),
+        0.005,
+        1,
+        DEFAULT_PRELOAD_HOLD_S,
+        &mut staged,
+    )
+    .expect("the campaign");
     staged.commit().expect("the campaign written");
     let campaign = Campaign::load(&out, true).expect("the campaign reads back");
     println!("{} tests, {samples} samples", campaign.tests.len());

@@ -165,9 +165,15 @@ pub struct IdentifyArgs {
     /// Jenkins cells of the Iwan bank.
     #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u16).range(1..=12))]
     pub jenkins: u16,
-    /// Add one x_f cell (eq 1.36).
-    #[arg(long)]
-    pub xf: bool,
+    /// x_f cells (eq 1.36); `--xf` alone adds one.
+    #[arg(
+        long,
+        num_args = 0..=1,
+        default_value_t = 0,
+        default_missing_value = "1",
+        value_parser = clap::value_parser!(u16).range(0..=8)
+    )]
+    pub xf: u16,
     /// Tests kept out of the fit and predicted instead.
     #[arg(long, num_args = 1.., value_name = "NAME")]
     pub hold_out: Vec<String>,
@@ -196,11 +202,16 @@ pub struct CampaignArgs {
     /// Hold of each multi-step level, s (Table B.2: 3600).
     #[arg(long, default_value_t = 3600.0)]
     pub hold_s: f64,
+    /// Hold at each preload before a preloaded test starts, s (§3.2.3:
+    /// 1200); written in `campaign.toml` for the replays.
+    #[arg(long, default_value_t = crate::identify::campaign::DEFAULT_PRELOAD_HOLD_S)]
+    pub preload_hold_s: f64,
     /// Preloads of the sines, mm (Table B.2: 0,1,2,3; part grid only).
     #[arg(long, value_delimiter = ',', default_value = "0,1,2,3")]
     pub preloads: Vec<f64>,
-    /// The grid: the part tests of Table B.2, or the shear-specimen tests
-    /// of Table B.1 in strain (with --hold-s 360 as in the table).
+    /// The grid: the part tests of Table B.2, or the shear- or
+    /// traction-specimen tests of Table B.1 in strain (with --hold-s 360
+    /// as in the table).
     #[arg(long, value_enum, default_value = "part")]
     pub grid: Grid,
 }
@@ -212,6 +223,8 @@ pub enum Grid {
     Part,
     /// Table B.1: shear specimen tests, strain (1.0 = 100 %).
     SpecimenShear,
+    /// Table B.1: traction specimen tests, strain (1.0 = 100 %).
+    SpecimenTraction,
 }
 
 /// `run`.
@@ -594,7 +607,7 @@ fn identify(a: &IdentifyArgs) -> Result<(), CliError> {
         maxwell_cells: usize::from(a.maxwell),
         hysteresis: a.hysteresis,
         jenkins_cells: usize::from(a.jenkins),
-        xf: a.xf,
+        xf_cells: usize::from(a.xf),
     };
     let started = std::time::Instant::now();
     let id = identify(&campaign, &class, &a.hold_out).map_err(|e| match e {
@@ -631,15 +644,23 @@ fn campaign(a: &CampaignArgs) -> Result<(), CliError> {
     }
     let grid = match a.grid {
         Grid::Part => synth::part_grid(a.hold_s, &a.preloads),
-        Grid::SpecimenShear => synth::specimen_shear_grid(a.hold_s),
+        Grid::SpecimenShear => synth::specimen_grid(synth::Specimen::Shear, a.hold_s),
+        Grid::SpecimenTraction => synth::specimen_grid(synth::Specimen::Traction, a.hold_s),
     };
     let mut staged = Staged::begin(&a.out)?;
-    let samples =
-        synth::write(&scene, &grid, a.noise, a.seed, &mut staged).map_err(|e| match e {
-            SynthError::Output(o) => CliError::Output(o),
-            SynthError::Noise(_) => CliError::Usage(e.to_string()),
-            other => CliError::Failed(other.to_string()),
-        })?;
+    let samples = synth::write(
+        &scene,
+        &grid,
+        a.noise,
+        a.seed,
+        a.preload_hold_s,
+        &mut staged,
+    )
+    .map_err(|e| match e {
+        SynthError::Output(o) => CliError::Output(o),
+        SynthError::Noise(_) | SynthError::Hold(_) => CliError::Usage(e.to_string()),
+        other => CliError::Failed(other.to_string()),
+    })?;
     let path = staged.commit()?;
     println!(
         "campaign: {} tests, {samples} samples, force noise {} of each range (seed {}) in {}",

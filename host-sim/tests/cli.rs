@@ -890,8 +890,8 @@ fn campaign_writes_the_specimen_grid_on_request() {
 }
 
 /// Every option of the model class runs end to end: a polynomial backbone,
-/// the STS law, two Maxwell cells and an x_f cell, written as a scene and
-/// as Rust constructors.
+/// the STS law, two Maxwell cells and two x_f cells, written as a scene,
+/// as Rust constructors and as C constants.
 #[test]
 fn identify_runs_every_model_class_option() {
     let dir = tempfile::tempdir().unwrap();
@@ -911,6 +911,7 @@ fn identify_runs_every_model_class_option() {
             "--maxwell",
             "2",
             "--xf",
+            "2",
             "--out",
         ])
         .arg(&out)
@@ -931,9 +932,11 @@ fn identify_runs_every_model_class_option() {
     for part in [
         "Polynomial<T, 6>",
         "TurningPoints<Sts<T>, 32>",
-        "XfBank<T, 1>",
+        "XfBank<T, 2>",
         "MaxwellBank<T, 2>",
     ] {
         assert!(rust.contains(part), "{part} not in model.rs");
     }
+    let header = std::fs::read_to_string(out.join("model.h")).unwrap();
+    assert!(header.contains("#define BUSHING_MODEL_XF_CELLS 2"));
 }

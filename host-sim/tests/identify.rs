@@ -147,6 +147,7 @@ fn maxwell_sine(f: f64, a: f64, per: usize, periods: usize) -> (Test, (f64, f64)
             speed_mm_per_min: None,
         },
         record,
+        preload_hold_s: 1200.0,
     };
     (test, (k * (g0 + re), k * im), k)
 }
@@ -276,7 +277,7 @@ fn a_generated_campaign_reads_back_with_the_model_s_moduli() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("campaign");
         let mut staged = Staged::begin(&out).unwrap();
-        let samples = synth::write(&scene, &grid, noise, 7, &mut staged).unwrap();
+        let samples = synth::write(&scene, &grid, noise, 7, 1200.0, &mut staged).unwrap();
         staged.commit().unwrap();
         let c = Campaign::load(&out, true).unwrap();
         assert_eq!(c.tests.len(), grid.len(), "{:?}", c.excluded);
@@ -319,7 +320,7 @@ fn a_generated_campaign_reads_back_with_the_model_s_moduli() {
 /// A generated test as the campaign reader would give it (no noise).
 fn generated(model: &str, shape: bushing_sim::identify::synth::Shape, kind: Kind) -> Test {
     let scene = bushing_sim::Scene::parse("model.toml", model).unwrap();
-    let rows = bushing_sim::identify::synth::record(&scene, &shape).unwrap();
+    let rows = bushing_sim::identify::synth::record(&scene, &shape, 1200.0).unwrap();
     let mut record = Record::default();
     for [t, x, f] in rows {
         record.time.push(t);
@@ -332,6 +333,7 @@ fn generated(model: &str, shape: bushing_sim::identify::synth::Shape, kind: Kind
         file: PathBuf::from("generated.csv"),
         nominal: Nominal::default(),
         record,
+        preload_hold_s: 1200.0,
     }
 }
 
@@ -598,6 +600,7 @@ fn degenerate_records_are_refused_not_panicked_on() {
             file: PathBuf::from("short.csv"),
             nominal: Nominal::default(),
             record: record.clone(),
+            preload_hold_s: 1200.0,
         };
         assert!(matches!(
             first_harmonic(&test(Kind::Sine)),

@@ -13,7 +13,13 @@
 //! frequency_hz = 5.0         # nominal values: optional, checked against the record
 //! amplitude_mm = 0.25
 //! preload_mm = 0.0
+//! # preload_hold_s = 1200.0 # how long the preload was held before the record
 //! ```
+//!
+//! A preloaded record is replayed from rest through a 20 s ramp and a hold
+//! at its preload of `preload_hold_s` (seconds): a test's own value, else
+//! `[campaign] preload_hold_s`, else the seed machine's 20 minutes
+//! (§3.2.3).
 //!
 //! A mistake in `campaign.toml` itself (its syntax, an unknown key, two
 //! tests of one name) stops the reading, with the line. A mistake in one
@@ -33,6 +39,11 @@ use crate::records::{Column, RecordError, Time, read_file, read_limited, read_ta
 pub const MAX_CAMPAIGN_BYTES: u64 = 1 << 20;
 /// Fewest samples a usable record has.
 pub const MIN_SAMPLES: usize = 8;
+/// The hold at a preload before a record when the campaign does not say:
+/// the seed machine's 20 minutes (§3.2.3), s.
+pub const DEFAULT_PRELOAD_HOLD_S: f64 = 1200.0;
+/// Longest hold at a preload a campaign may state (a day), s.
+pub const MAX_PRELOAD_HOLD_S: f64 = 86_400.0;
 
 /// `campaign.toml`, as written.
 #[derive(Debug, Clone, Deserialize)]
@@ -50,6 +61,8 @@ struct Header {
     name: String,
     #[serde(default)]
     columns: Columns,
+    #[serde(default)]
+    preload_hold_s: Option<Spanned<f64>>,
 }
 
 /// The names of the three columns every test's CSV has.
@@ -102,6 +115,8 @@ struct TestSpec {
     preload_mm: Option<f64>,
     #[serde(default)]
     speed_mm_per_min: Option<f64>,
+    #[serde(default)]
+    preload_hold_s: Option<f64>,
 }
 
 /// What a test imposes (seed 000 §3.2.1).
@@ -184,6 +199,9 @@ pub struct Test {
     pub nominal: Nominal,
     /// The samples.
     pub record: Record,
+    /// How long the machine held the record's preload before it started,
+    /// s (the replay's lead-in, [`super::replay::preload_steps`]).
+    pub preload_hold_s: f64,
 }
 
 /// A test left out, and why.
@@ -222,6 +240,9 @@ pub enum TestError {
         /// Samples read.
         samples: usize,
     },
+    /// A preload hold that is not a duration a replay can run.
+    #[error("preload_hold_s = {0} must be from 0 to {MAX_PRELOAD_HOLD_S} s")]
+    BadHold(f64),
     /// A check of pre-processing failed (the record does not match its
     /// nominal values, the force is clipped, too few samples per period).
     #[error("{0}")]
@@ -262,6 +283,16 @@ pub enum CampaignError {
         line: usize,
         /// Line of the first.
         first: usize,
+    },
+    /// `[campaign] preload_hold_s` is not a duration a replay can run.
+    #[error("{file}:{line}: preload_hold_s = {value} must be from 0 to {MAX_PRELOAD_HOLD_S} s")]
+    BadHold {
+        /// The file.
+        file: String,
+        /// Line, from 1.
+        line: usize,
+        /// The value given.
+        value: f64,
     },
     /// No test is listed.
     #[error("{file}: no [[test]]: a campaign lists its tests")]
@@ -348,12 +379,23 @@ impl Campaign {
             seen.push((t.get_ref().name.clone(), line));
         }
         let columns = raw.campaign.columns;
+        let hold = match raw.campaign.preload_hold_s {
+            Some(h) if !valid_hold(*h.get_ref()) => {
+                return Err(CampaignError::BadHold {
+                    file: file.to_string(),
+                    line: line_of(h.span().start),
+                    value: *h.get_ref(),
+                });
+            }
+            Some(h) => h.into_inner(),
+            None => DEFAULT_PRELOAD_HOLD_S,
+        };
         let mut tests = Vec::new();
         let mut excluded = Vec::new();
         for spec in raw.tests {
             let spec = spec.into_inner();
             let name = spec.name.clone();
-            match read_test(spec, dir, confine, &columns) {
+            match read_test(spec, dir, confine, &columns, hold) {
                 Ok(test) => tests.push(test),
                 Err(reason) => excluded.push(Excluded { name, reason }),
             }
@@ -379,7 +421,13 @@ fn read_test(
     dir: &Path,
     confine: bool,
     columns: &Columns,
+    hold: f64,
 ) -> Result<Test, TestError> {
+    let preload_hold_s = match spec.preload_hold_s {
+        Some(h) if !valid_hold(h) => return Err(TestError::BadHold(h)),
+        Some(h) => h,
+        None => hold,
+    };
     let kind = Kind::ALL
         .into_iter()
         .find(|k| k.name() == spec.kind)
@@ -420,7 +468,12 @@ fn read_test(
         file: dir.join(&spec.file),
         nominal,
         record,
+        preload_hold_s,
     })
+}
+
+fn valid_hold(h: f64) -> bool {
+    (0.0..=MAX_PRELOAD_HOLD_S).contains(&h)
 }
 
 fn nominal(name: &'static str, v: Option<f64>, positive: bool) -> Result<Option<f64>, TestError> {

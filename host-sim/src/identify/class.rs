@@ -12,8 +12,9 @@
 //! - **hysteresis**: an Iwan bank of Jenkins cells in clamp form (eq 1.32:
 //!   ln g and ln of the slip force each), or the continuous STS law on a
 //!   turning-point stack (eq 1.42: ln C and ln K_1), or none;
-//! - **x_f cell** (eq 1.36, exact-ramp form), optional: ln ω, ln g and
-//!   ln x_f.
+//! - **x_f cells** (eq 1.36, exact-ramp form), any number (the seed's
+//!   materials have two with g > 0, Table 3.1): ln ω, ln g and ln x_f
+//!   each.
 //!
 //! Logarithms keep every frequency, fraction, force and distance positive
 //! whatever step the optimiser takes; a candidate whose fractions sum
@@ -64,8 +65,8 @@ pub struct ModelClass {
     pub hysteresis: HysteresisForm,
     /// Jenkins cells of the Iwan bank.
     pub jenkins_cells: usize,
-    /// One x_f cell.
-    pub xf: bool,
+    /// x_f cells (0: none).
+    pub xf_cells: usize,
 }
 
 impl Default for ModelClass {
@@ -77,7 +78,7 @@ impl Default for ModelClass {
             maxwell_cells: 3,
             hysteresis: HysteresisForm::Iwan,
             jenkins_cells: 4,
-            xf: false,
+            xf_cells: 0,
         }
     }
 }
@@ -93,8 +94,8 @@ pub struct Candidate {
     pub jenkins: Vec<IwanCellSpec>,
     /// STS law `(C N²/mm, K_1 N/mm)`.
     pub sts: Option<(f64, f64)>,
-    /// The x_f cell.
-    pub xf: Option<XfSpec>,
+    /// The x_f cells.
+    pub xf: Vec<XfSpec>,
 }
 
 /// What a parameter is, for the report.
@@ -134,10 +135,10 @@ impl Candidate {
                 first_loading: FirstLoading::Masing,
             }));
         }
-        if let Some(xf) = self.xf {
+        if !self.xf.is_empty() {
             effects.push(Effect::Xf(Xf {
                 form: XfForm::ExactRamp,
-                cells: vec![xf],
+                cells: self.xf.clone(),
             }));
         }
         Model {
@@ -157,7 +158,7 @@ impl Candidate {
     pub fn g0(&self) -> f64 {
         1.0 - self.maxwell.iter().map(|c| c.g).sum::<f64>()
             - self.jenkins.iter().map(|c| c.g).sum::<f64>()
-            - self.xf.map_or(0.0, |c| c.g)
+            - self.xf.iter().map(|c| c.g).sum::<f64>()
     }
 
     /// The parameters, in the order of [`Candidate::vector`].
@@ -201,10 +202,10 @@ impl Candidate {
             p("sts.c".into(), "N²/mm", c, true);
             p("sts.k1".into(), "N/mm", k1, true);
         }
-        if let Some(c) = self.xf {
-            p("xf.f_hz".into(), "Hz", c.omega / TAU, true);
-            p("xf.g".into(), "", c.g, true);
-            p("xf.x_f".into(), "mm", c.x_f, true);
+        for (i, c) in self.xf.iter().enumerate() {
+            p(format!("xf[{i}].f_hz"), "Hz", c.omega / TAU, true);
+            p(format!("xf[{i}].g"), "", c.g, true);
+            p(format!("xf[{i}].x_f"), "mm", c.x_f, true);
         }
         out
     }
@@ -304,11 +305,13 @@ impl Candidate {
             let c = next();
             (c, next())
         });
-        let xf = self.xf.map(|_| {
-            let f = next();
-            let g = next();
-            XfSpec::hz(f, g, next())
-        });
+        let xf = (0..self.xf.len())
+            .map(|_| {
+                let f = next();
+                let g = next();
+                XfSpec::hz(f, g, next())
+            })
+            .collect();
         Self {
             backbone,
             maxwell,

@@ -113,14 +113,18 @@ pub fn toml(m: &Candidate, campaign: &str, demo: Demo) -> String {
             num(k1)
         );
     }
-    if let Some(c) = m.xf {
-        let _ = write!(
-            s,
-            "\n[[effects]]\ntype = \"xf\"\nform = \"exact-ramp\"\ncells = [{{ f_hz = {}, g = {}, x_f = {} }}]\n",
-            num(hz(c.omega)),
-            num(c.g),
-            num(c.x_f)
-        );
+    if !m.xf.is_empty() {
+        s.push_str("\n[[effects]]\ntype = \"xf\"\nform = \"exact-ramp\"\ncells = [\n");
+        for c in &m.xf {
+            let _ = writeln!(
+                s,
+                "  {{ f_hz = {}, g = {}, x_f = {} }},",
+                num(hz(c.omega)),
+                num(c.g),
+                num(c.x_f)
+            );
+        }
+        s.push_str("]\n");
     }
     let _ = write!(
         s,
@@ -146,9 +150,9 @@ fn rust_effects(m: &Candidate) -> (Vec<String>, Vec<String>) {
         types.push(format!("TurningPoints<Sts<T>, {STACK_DEPTH}>"));
         calls.push("TurningPoints::new(Sts::new(STS_C, STS_K1)?, FirstLoading::Masing)".into());
     }
-    if m.xf.is_some() {
-        types.push("XfBank<T, 1>".into());
-        calls.push("XfBank::new(XfForm::ExactRamp, &[XF_CELL], dt)?".into());
+    if !m.xf.is_empty() {
+        types.push(format!("XfBank<T, {}>", m.xf.len()));
+        calls.push("XfBank::new(XfForm::ExactRamp, &xf_cells(), dt)?".into());
     }
     (types, calls)
 }
@@ -258,17 +262,21 @@ pub fn rust(m: &Candidate, campaign: &str) -> String {
             num(k1)
         );
     }
-    if let Some(c) = m.xf {
+    if !m.xf.is_empty() {
         imports.extend(["XfBank", "XfForm", "XfSpec"]);
         let _ = writeln!(
             s,
-            "/// The x_f cell: corner {} Hz, fraction {}, x_f {} mm.\npub const XF_CELL: XfSpec = XfSpec {{ omega: core::f64::consts::TAU * {}, g: {}, x_f: {} }};",
-            num(hz(c.omega)),
-            num(c.g),
-            num(c.x_f),
-            num(hz(c.omega)),
-            num(c.g),
-            num(c.x_f)
+            "/// x_f cells: (corner Hz, fraction g, x_f mm).\npub const XF_HZ_G_XF: [(f64, f64, f64); {}] = [{}];",
+            m.xf.len(),
+            m.xf.iter()
+                .map(|c| format!("({}, {}, {})", num(hz(c.omega)), num(c.g), num(c.x_f)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        let _ = writeln!(
+            s,
+            "\n/// The x_f cells as the core's specs.\npub fn xf_cells() -> [XfSpec; {}] {{\n    XF_HZ_G_XF.map(|(f, g, x_f)| XfSpec::hz(f, g, x_f))\n}}\n",
+            m.xf.len()
         );
     }
     imports.sort_unstable();
@@ -385,11 +393,16 @@ pub fn c_header(m: &Candidate, campaign: &str) -> String {
             c_num(k1)
         );
     }
-    if let Some(c) = m.xf {
+    if !m.xf.is_empty() {
+        let _ = writeln!(s, "#define BUSHING_MODEL_XF_CELLS {}", m.xf.len());
         let _ = writeln!(
             s,
-            "/* {{corner Hz, fraction g, x_f mm}} */\nstatic const double bushing_model_xf[3] = {{{}}};",
-            list(&[hz(c.omega), c.g, c.x_f])
+            "/* {{corner Hz, fraction g, x_f mm}} */\nstatic const double bushing_model_xf[{}][3] = {{{}}};",
+            m.xf.len(),
+            m.xf.iter()
+                .map(|c| format!("{{{}}}", list(&[hz(c.omega), c.g, c.x_f])))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     }
     s.push_str("\n#endif /* BUSHING_MODEL_H */\n");

@@ -260,7 +260,7 @@ impl Bounds {
             .maxwell
             .iter()
             .map(|m| m.omega)
-            .chain(c.xf.map(|x| x.omega))
+            .chain(c.xf.iter().map(|x| x.omega))
             .map(|w| w / std::f64::consts::TAU);
         let mut out: Vec<f64> = corners
             .map(|f| (f / self.f_hi_hz).ln().max(0.0) + (self.f_lo_hz / f).ln().max(0.0))

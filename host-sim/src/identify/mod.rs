@@ -7,7 +7,10 @@
 //! first stage of the identification ([`backbone`]: the long-term
 //! backbone from the triangles' midlines), the second ([`hysteresis`]:
 //! Jenkins cells placed on the normalised instantaneous-modulus curve),
-//! and campaigns generated from a known model ([`synth`]).
+//! the third ([`stages`]: Maxwell cells; [`xf_stage`]: x_f cells on the
+//! sines' harmonics), the joint refinement ([`joint`]) on replays of the
+//! records ([`replay`]), and campaigns generated from a known model
+//! ([`synth`]).
 
 pub mod backbone;
 pub mod campaign;
@@ -24,6 +27,7 @@ pub mod stages;
 pub mod summary;
 pub mod synth;
 pub mod triangle;
+pub mod xf_stage;
 
 /// The smallest and largest of `values` (`(inf, -inf)` when there are
 /// none).

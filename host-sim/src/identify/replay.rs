@@ -11,25 +11,80 @@
 //!   which the exact-ramp forms integrate exactly.
 //! - **Lead-in.** Every replay starts from rest at 0 mm. A record that
 //!   starts elsewhere (a preload) is reached as the machine reaches it
-//!   (seed 000 §3.2.3): a 10 s ramp and a 10 s hold. A sine was recorded
-//!   in its steady cycle after sweeps the record does not hold: its
-//!   replay runs the record's whole periods once and is scored on a
-//!   second pass. The first sample is reached in one step of the first
-//!   interval.
+//!   (seed 000 §3.2.3): a 20 s ramp, then the test's preload hold
+//!   (`preload_hold_s` in `campaign.toml`, the seed's 20 minutes by
+//!   default), see [`preload_steps`]. A sine was recorded in its steady
+//!   cycle after sweeps the record does not hold: its replay runs the
+//!   record's whole periods for at least 2 s ([`lead_passes`]) and is
+//!   scored on the pass after. The first
+//!   sample is reached in one step of the first interval. Generated
+//!   campaigns (`synth`) are made with the same lead-in, so the model that
+//!   made a campaign replays it exactly.
 
 use bushing::ParamError;
 
-use super::campaign::{Kind, Test, TestError};
+use super::campaign::{Kind, MAX_PRELOAD_HOLD_S, Test, TestError};
 use crate::family::Effect;
 use crate::family::backbone::BackboneSpec;
 use crate::model::{SceneBushing, build_parts};
 
 /// Most distinct intervals a record may have (to 0.1 %).
 pub const MAX_INTERVALS: usize = 64;
-/// Ramp to a sine's preload and hold at it before the lead-in, s each.
-pub const PRELOAD_RAMP_S: f64 = 10.0;
-/// Step of the ramp to the preload and of the hold, s.
+/// A step list's entry that does not step: the force is read as it is.
+const READ: u8 = u8::MAX;
+/// Shortest unrecorded lead-in of a sine before its record, s: the
+/// machine's sweep at one frequency (Fig. 3.3) runs for seconds before a
+/// step is recorded.
+pub const SINE_LEAD_S: f64 = 2.0;
+/// Most passes of a sine record in its lead-in.
+const MAX_LEAD_PASSES: usize = 1000;
+
+/// Unrecorded passes of a sine record of `record_s` seconds before it is
+/// recorded: enough whole passes for [`SINE_LEAD_S`], at least one. The
+/// one rule of replays and of generated campaigns.
+pub fn lead_passes(record_s: f64) -> usize {
+    let n = (SINE_LEAD_S / record_s).ceil();
+    if n.is_finite() && n >= 1.0 {
+        (n as usize).min(MAX_LEAD_PASSES)
+    } else {
+        1
+    }
+}
+/// Ramp from rest to a record's preload, s (the multi-step ramp of
+/// §3.2.3).
+pub const PRELOAD_RAMP_S: f64 = 20.0;
+/// Step of the ramp to the preload, s.
 const PRELOAD_DT: f64 = 0.05;
+/// Longest step of the hold at the preload, s: the displacement is
+/// constant, and every cell's decay over a hold is exact at any step.
+const HOLD_DT: f64 = 1.0;
+
+/// The steps `(dt s, x mm)` that take a model from rest at 0 mm to a
+/// record's first displacement `x0` and hold it there `hold_s` before the
+/// record (none when `x0` is 0): a ramp of [`PRELOAD_RAMP_S`] in steps of
+/// 0.05 s, then the hold in equal steps of at most 1 s. The one lead-in of
+/// replays and of generated campaigns. `hold_s` is clamped to
+/// [0, [`MAX_PRELOAD_HOLD_S`]].
+pub fn preload_steps(x0: f64, hold_s: f64) -> Vec<(f64, f64)> {
+    if x0 == 0.0 {
+        return Vec::new();
+    }
+    let n = (PRELOAD_RAMP_S / PRELOAD_DT).round() as usize;
+    let hold_s = if hold_s.is_finite() {
+        hold_s.clamp(0.0, MAX_PRELOAD_HOLD_S)
+    } else {
+        0.0
+    };
+    let holds = (hold_s / HOLD_DT).ceil() as usize;
+    let mut steps: Vec<(f64, f64)> = (1..=n)
+        .map(|k| (PRELOAD_DT, x0 * k as f64 / n as f64))
+        .collect();
+    if holds > 0 {
+        let dt = hold_s / holds as f64;
+        steps.extend((0..holds).map(|_| (dt, x0)));
+    }
+    steps
+}
 
 /// A test ready to replay.
 #[derive(Debug, Clone, PartialEq)]
@@ -40,8 +95,9 @@ pub struct Drive {
     pub kind: Kind,
     /// The distinct intervals, s.
     dts: Vec<f64>,
-    /// Each step: the index of its interval, the displacement it reaches
-    /// (mm), and whether that is a sample of the record.
+    /// Each step: the index of its interval ([`READ`]: no step), the
+    /// displacement it reaches (mm), and whether that is a sample of the
+    /// record.
     steps: Vec<(u8, f64, bool)>,
     /// The step that reaches the record's first sample on the scored pass.
     scored_from: usize,
@@ -75,19 +131,16 @@ impl Drive {
             scored_from: 0,
             samples: r.len(),
         };
-        let first_dt = r.time[1] - r.time[0];
-        // Sample 0 is reached in one step of the first interval.
-        let intervals: Vec<f64> = std::iter::once(first_dt)
-            .chain(r.time.windows(2).map(|w| w[1] - w[0]))
-            .collect();
         let peaks = if test.kind == Kind::Triangle {
             turning_points(&r.time, &r.x)
         } else {
             Vec::new()
         };
+        // Samples 1 on, each reached from the one before.
         let mut pass = Vec::with_capacity(r.len() + peaks.len());
-        for (i, (&dt, &x)) in intervals.iter().zip(&r.x).enumerate() {
-            match peaks.iter().find(|p| p.before == i) {
+        for (i, (w, &x)) in r.time.windows(2).zip(&r.x[1..]).enumerate() {
+            let dt = w[1] - w[0];
+            match peaks.iter().find(|p| p.before == i + 1) {
                 Some(p) => {
                     pass.push((d.interval(dt * p.share)?, p.x, false));
                     pass.push((d.interval(dt * (1.0 - p.share))?, x, true));
@@ -95,19 +148,36 @@ impl Drive {
                 None => pass.push((d.interval(dt)?, x, true)),
             }
         }
-        let x0 = r.x[0];
-        if x0 != 0.0 {
-            let lead = d.interval(PRELOAD_DT)?;
-            let n = (PRELOAD_RAMP_S / PRELOAD_DT).round() as usize;
-            for k in 1..=n {
-                d.steps.push((lead, x0 * k as f64 / n as f64, false));
-            }
-            d.steps.extend((0..n).map(|_| (lead, x0, false)));
+        for (dt, x) in preload_steps(r.x[0], test.preload_hold_s) {
+            let i = d.interval(dt)?;
+            d.steps.push((i, x, false));
         }
+        // The lead-in ends at sample 0 (rest at 0 mm, or the preload).
+        let read_first = (READ, r.x[0], true);
         if test.kind == Kind::Sine {
-            d.steps.extend_from_slice(&pass);
+            // A record of whole periods that ends where it began: its last
+            // sample is its first of the next period. Otherwise sample 0
+            // is reached in one step of the first interval.
+            let (lo, hi) = super::extremes(&r.x);
+            let closes = (r.x[r.len() - 1] - r.x[0]).abs() <= 1e-9 * (hi - lo);
+            let wrap = if closes {
+                READ
+            } else {
+                d.interval(r.time[1] - r.time[0])?
+            };
+            let record_s = r.time[r.len() - 1] - r.time[0];
+            for _ in 0..lead_passes(record_s) {
+                d.steps.extend_from_slice(&pass);
+                d.steps.push((wrap, r.x[0], false));
+            }
+            d.scored_from = d.steps.len() - 1;
+            if let Some(last) = d.steps.last_mut() {
+                last.2 = true;
+            }
+        } else {
+            d.scored_from = d.steps.len();
+            d.steps.push(read_first);
         }
-        d.scored_from = d.steps.len();
         d.steps.extend_from_slice(&pass);
         Ok(d)
     }
@@ -147,15 +217,20 @@ impl Drive {
         let mut state = first.state_at(0.0);
         let mut forces = Vec::with_capacity(self.samples);
         for (n, &(i, x, sample)) in self.steps.iter().enumerate() {
-            let Some(b) = bushings.get(usize::from(i)) else {
-                return Ok(None);
+            let force = if i == READ {
+                state.force()
+            } else {
+                let Some(b) = bushings.get(usize::from(i)) else {
+                    return Ok(None);
+                };
+                let out = b.step(&mut state, x);
+                if out.effects.is_none() {
+                    return Ok(None);
+                }
+                out.force
             };
-            let out = b.step(&mut state, x);
-            if out.effects.is_none() {
-                return Ok(None);
-            }
             if n >= self.scored_from && sample {
-                forces.push(out.force);
+                forces.push(force);
             }
         }
         Ok(Some(forces))

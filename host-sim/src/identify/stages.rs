@@ -32,6 +32,7 @@ use super::hysteresis::{Placed, place};
 use super::replay::Drive;
 use super::report::Preprocessed;
 use super::sine::{SinePoint, model_harmonic};
+use super::xf_stage::{self, Target};
 use crate::family::backbone::BackboneSpec;
 
 /// Why the stages could not give a starting model.
@@ -49,9 +50,9 @@ pub enum StageError {
          than the curve has bins)"
     )]
     NoHysteresis(&'static str),
-    /// Maxwell cells were asked for without sines.
-    #[error("{0} Maxwell cells need at least {1} sine tests, the campaign has {2}")]
-    NoSines(usize, usize, usize),
+    /// Rate-dependent cells were asked for without sines.
+    #[error("{1} {0} cells need at least {2} sine tests, the campaign has {3}")]
+    NoSines(&'static str, usize, usize, usize),
 }
 
 /// One point of the Maxwell stage: a sine's rate-dependent storage and
@@ -142,8 +143,11 @@ pub fn stages(
         HysteresisForm::None => (Vec::new(), None),
     };
     let drops: f64 = jenkins.iter().map(|c| c.drop).sum();
-    let compose = |maxwell: &[(f64, f64)], xf: Option<(f64, f64, f64)>| {
-        let rest = 1.0 + drops + maxwell.iter().map(|m| m.1).sum::<f64>() + xf.map_or(0.0, |x| x.1);
+    let compose = |maxwell: &[(f64, f64)], xf: &[(f64, f64, f64)]| {
+        let rest = 1.0
+            + drops
+            + maxwell.iter().map(|m| m.1).sum::<f64>()
+            + xf.iter().map(|x| x.1).sum::<f64>();
         let g0 = 1.0 / rest;
         let k_inf = k_long(0.0) / g0;
         Candidate {
@@ -160,12 +164,15 @@ pub fn stages(
                 })
                 .collect(),
             sts,
-            xf: xf.map(|(f, r, x_f)| XfSpec::hz(f, r * g0, x_f)),
+            xf: xf
+                .iter()
+                .map(|&(f, r, x_f)| XfSpec::hz(f, r * g0, x_f))
+                .collect(),
         }
     };
 
     // Stage 3: the rate-dependent part of every sine.
-    let slow = compose(&[], None).model();
+    let slow = compose(&[], &[]).model();
     let mut rate_points = Vec::new();
     for (name, s) in &p.sines {
         let Some(test) = campaign.tests.iter().find(|t| &t.name == name) else {
@@ -187,12 +194,26 @@ pub fn stages(
     } else {
         let needed = m.max(2);
         if rate_points.len() < needed {
-            return Err(StageError::NoSines(m, needed, rate_points.len()));
+            return Err(StageError::NoSines("Maxwell", m, needed, rate_points.len()));
         }
         maxwell_fit(&rate_points, m)
     };
-    let xf = class.xf.then(|| x_f_start(p));
-    let initial = compose(&maxwell, xf);
+    // Stage 3b: the x_f cells on the sines' harmonics, the Maxwell cells
+    // held.
+    let targets: Vec<Target> = p
+        .sines
+        .iter()
+        .filter_map(|(name, s)| {
+            let test = campaign.tests.iter().find(|t| &t.name == name)?;
+            Target::new(test, *s)
+        })
+        .collect();
+    if class.xf_cells > 0 && targets.is_empty() {
+        return Err(StageError::NoSines("x_f", class.xf_cells, 1, 0));
+    }
+    let with_xf = |xf: &[(f64, f64, f64)]| compose(&maxwell, xf);
+    let xf = xf_stage::fit(&targets, &with_xf, class.xf_cells);
+    let initial = compose(&maxwell, &xf);
     Ok(Stages {
         long_term,
         jenkins,
@@ -284,18 +305,6 @@ fn sts_fit(curve: &[(f64, f64, usize)], k_long: f64, from_mm: f64) -> Option<(f6
         }
     }
     Some(best.1)
-}
-
-/// A starting x_f cell: a slow cell (the seed's 0.005 Hz one) holding a
-/// tenth of the long-term load, relaxing over the smallest amplitude.
-fn x_f_start(p: &Preprocessed) -> (f64, f64, f64) {
-    let smallest = p
-        .sines
-        .iter()
-        .map(|(_, s)| s.amplitude_mm)
-        .fold(f64::INFINITY, f64::min);
-    let x_f = if smallest.is_finite() { smallest } else { 0.05 };
-    (0.005, 0.1, x_f)
 }
 
 /// Maxwell cells `(f Hz, r = g / g⁰)` fitted to the rate points:

@@ -161,7 +161,7 @@ pub fn markdown(id: &Identification, seconds: f64) -> String {
     let _ = writeln!(s, "# Identification of the campaign \"{}\"\n", id.pre.name);
     let _ = writeln!(
         s,
-        "Model class: {:?} backbone ({}), {} Maxwell cells, hysteresis {:?}{}, x_f cell {}. \
+        "Model class: {:?} backbone ({}), {} Maxwell cells, hysteresis {:?}{}, {} x_f cells. \
          {} tests fitted, {} held out, {} left out. Identified in {seconds:.1} s.\n",
         c.backbone,
         c.backbone_size,
@@ -172,7 +172,7 @@ pub fn markdown(id: &Identification, seconds: f64) -> String {
         } else {
             String::new()
         },
-        if c.xf { "on" } else { "off" },
+        c.xf_cells,
         id.fitted.len(),
         id.held_out.len(),
         id.pre.excluded.len()

@@ -7,20 +7,25 @@
 //! the identification is tested on, and the worked example.
 //!
 //! Each test is stepped at its own model step (a whole fraction of its
-//! sampling step), from rest at 0 mm. A sine is recorded after a lead-in
-//! of whole periods (at least 5, and at least 2 s, plus 20 s with a
-//! preload, reached over its first 10 s) in which the model settles into
-//! its steady cycle, as the machine's sweeps do (Fig. 3.3); the other
-//! tests are recorded from their start.
+//! sampling step), from rest at 0 mm. A preloaded test first has the
+//! replay's lead-in ([`super::replay::preload_steps`]: a 20 s ramp to the
+//! preload, then the campaign's preload hold). A sine is recorded after
+//! unrecorded passes of its cycles (at least 2 s), in which the model
+//! settles into its steady cycle as the machine's sweeps let it
+//! (Fig. 3.3); the other tests
+//! are recorded from their start. The replay of a record makes the same
+//! lead-in, so the model that generated a campaign replays it to within
+//! its sub-steps.
 
 use std::f64::consts::TAU;
 
 use bushing::ParamError;
 use bushing_kernels::Noise;
 
-use super::campaign::Kind;
+use super::campaign::{Kind, MAX_PRELOAD_HOLD_S};
+use super::replay;
 use crate::csv_text::CsvText;
-use crate::model;
+use crate::model::{self, SceneBushing};
 use crate::output::{OutputError, Staged};
 use crate::scene::Scene;
 
@@ -78,9 +83,6 @@ pub enum Shape {
 
 /// Ramp time of a multi-step level, s (§3.2.3).
 pub const RAMP_S: f64 = 20.0;
-/// Settling of a preloaded sine before its lead-in, s: the preload is
-/// reached over the first half (the seed's machine waits 20 minutes).
-pub const PRELOAD_S: f64 = 20.0;
 /// Model steps per sample.
 const SUBSTEPS: usize = 4;
 /// Samples per mm of a triangle on the seed's machine: 3 Hz at 10 mm/min,
@@ -154,7 +156,7 @@ impl Shape {
                 amplitude_mm,
                 cycles,
                 ..
-            } => f64::from(*cycles) * 4.0 * amplitude_mm / (speed_mm_per_min / 60.0) + self.lead(),
+            } => f64::from(*cycles) * 4.0 * amplitude_mm / (speed_mm_per_min / 60.0),
             Self::Sine {
                 frequency_hz,
                 cycles,
@@ -164,22 +166,27 @@ impl Shape {
         }
     }
 
-    /// Time before the record starts, s: a sine's lead-in of whole periods,
-    /// at least 5 and at least 2 s, plus [`PRELOAD_S`] when it has a
-    /// preload; for a preloaded triangle the preload reached over the first
-    /// half of [`PRELOAD_S`] and held over the second; 0 for the other
-    /// tests.
+    /// Time before the record starts, after the preload's lead-in, s: a
+    /// sine's unrecorded passes of its cycles
+    /// ([`replay::lead_passes`]); 0 for the other tests.
     pub fn lead(&self) -> f64 {
         match self {
-            Self::Triangle { preload_mm, .. } if *preload_mm != 0.0 => PRELOAD_S,
             Self::Sine {
                 frequency_hz,
-                preload_mm,
+                cycles,
                 ..
             } => {
-                let settle = if *preload_mm == 0.0 { 0.0 } else { PRELOAD_S };
-                ((2.0 + settle) * frequency_hz).ceil().max(5.0) / frequency_hz
+                let record_s = f64::from(*cycles) / frequency_hz;
+                replay::lead_passes(record_s) as f64 * record_s
             }
+            _ => 0.0,
+        }
+    }
+
+    /// The preload the test starts from, mm.
+    pub fn preload(&self) -> f64 {
+        match self {
+            Self::Triangle { preload_mm, .. } | Self::Sine { preload_mm, .. } => *preload_mm,
             _ => 0.0,
         }
     }
@@ -232,11 +239,6 @@ impl Shape {
                 preload_mm,
                 ..
             } => {
-                let lead = self.lead();
-                if t < lead {
-                    return preload_mm * (2.0 * t / PRELOAD_S).min(1.0);
-                }
-                let t = t - lead;
                 // From the preload up first: a quarter period to the top.
                 let period = 4.0 * amplitude_mm / (speed_mm_per_min / 60.0);
                 let p = (t / period + 0.25).rem_euclid(1.0);
@@ -247,11 +249,7 @@ impl Shape {
                 amplitude_mm,
                 preload_mm,
                 ..
-            } => {
-                // The preload reached over the first half of its settling.
-                let ramp = (2.0 * t / PRELOAD_S).min(1.0);
-                preload_mm * ramp + amplitude_mm * (TAU * frequency_hz * t).sin()
-            }
+            } => preload_mm + amplitude_mm * (TAU * frequency_hz * t).sin(),
             Self::Random {
                 f_lo_hz,
                 f_hi_hz,
@@ -315,34 +313,85 @@ pub fn part_grid(hold_s: f64, preloads: &[f64]) -> Vec<Shape> {
     grid
 }
 
-/// The shear-specimen grids of Table B.1 of seed 000, in strain (a unit
-/// specimen: 1.0 is 100 %): multi-step levels 0.1 to 1.0 held `hold_s`
-/// (360 s in the table); triangles of 0.5 at 1 and 10 per minute about 0
-/// and 0.2, and of 0.9 at 10 per minute, 3 cycles, sampled 90 times per
-/// unit (the machine's 18 samples per mm on a specimen 5 mm thick, an
-/// assumption: the thickness is not given); sines of 5 cycles about the
-/// preloads 0, 0.45 and 0.9, at 0.1 to 10 Hz of 1e-4 to 0.01 and at 50 and
-/// 100 Hz of 1e-4 to 0.1 (the table's amplitudes, see the reference flag
-/// on them).
-pub fn specimen_shear_grid(hold_s: f64) -> Vec<Shape> {
-    let mut grid = vec![Shape::MultiStep {
-        levels: (1..=10).map(|k| 0.1 * f64::from(k)).collect(),
-        hold_s,
-    }];
-    let triangle = |speed, amplitude_mm, preload_mm| Shape::Triangle {
-        speed_mm_per_min: speed,
+/// A specimen of Table B.1 of seed 000, tested in strain (a unit
+/// specimen: 1.0 is 100 %).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Specimen {
+    /// Simple shear, a rubber layer 5 mm thick (an assumption: the
+    /// thickness is not given): 10 mm/min is 2 per minute.
+    Shear,
+    /// Traction, a gauge length of 20 mm (an assumption): 10 mm/min is
+    /// 0.5 per minute.
+    Traction,
+}
+
+impl Specimen {
+    /// Machine travel per unit strain, mm.
+    pub const fn gauge_mm(self) -> f64 {
+        match self {
+            Self::Shear => 5.0,
+            Self::Traction => 20.0,
+        }
+    }
+}
+
+/// The specimen grids of Table B.1 of seed 000, in strain, with the
+/// machine's speeds (1 and 10 mm/min) and sampling (18 per mm) carried
+/// through the specimen's gauge ([`Specimen::gauge_mm`]):
+///
+/// - multi-step: shear 0.1 to 1.0, traction -0.3 to 0.6 by 0.15, held
+///   `hold_s` (360 s in the table);
+/// - triangles of 3 cycles: shear 0.5 about 0 and 0.2 at both speeds and
+///   0.9 about 0 at 10 mm/min; traction 0.2 about -0.1, 0 and 0.1 at both
+///   speeds, 0.05 about -0.3 to 0.3 by 0.1 at 10 mm/min (the Madelung
+///   loops), and 0.001 to 0.1 about 0 at 10 mm/min (the Payne sweep, its
+///   0.5 left out: it leaves the tabulated law);
+/// - sines of 5 cycles about the preloads (shear 0, 0.45, 0.9; traction
+///   -0.3 to 0.6 by 0.15), at 0.1 to 10 Hz of 1e-4 to 0.01 and at 50 and
+///   100 Hz of 1e-4 to 0.1 (the table's amplitudes, see the reference flag
+///   on them).
+pub fn specimen_grid(specimen: Specimen, hold_s: f64) -> Vec<Shape> {
+    let gauge = specimen.gauge_mm();
+    let triangle = |mm_per_min: f64, amplitude_mm, preload_mm| Shape::Triangle {
+        speed_mm_per_min: mm_per_min / gauge,
         amplitude_mm,
         preload_mm,
         cycles: 3,
-        samples_per_mm: 5.0 * PART_SAMPLES_PER_MM,
+        samples_per_mm: gauge * PART_SAMPLES_PER_MM,
     };
-    for speed in [1.0, 10.0] {
-        for p in [0.0, 0.2] {
-            grid.push(triangle(speed, 0.5, p));
+    // Levels in hundredths, so that names read as the table's values.
+    let steps = |from: i32, step: i32, n: i32| -> Vec<f64> {
+        (0..n).map(|k| f64::from(from + step * k) / 100.0).collect()
+    };
+    let (levels, preloads) = match specimen {
+        Specimen::Shear => (steps(10, 10, 10), vec![0.0, 0.45, 0.9]),
+        Specimen::Traction => (steps(-30, 15, 7), steps(-30, 15, 7)),
+    };
+    let mut grid = vec![Shape::MultiStep { levels, hold_s }];
+    match specimen {
+        Specimen::Shear => {
+            for speed in [1.0, 10.0] {
+                for p in [0.0, 0.2] {
+                    grid.push(triangle(speed, 0.5, p));
+                }
+            }
+            grid.push(triangle(10.0, 0.9, 0.0));
+        }
+        Specimen::Traction => {
+            for speed in [1.0, 10.0] {
+                for p in [-0.1, 0.0, 0.1] {
+                    grid.push(triangle(speed, 0.2, p));
+                }
+            }
+            for p in steps(-30, 10, 7) {
+                grid.push(triangle(10.0, 0.05, p));
+            }
+            for a in [0.001, 0.005, 0.01, 0.1] {
+                grid.push(triangle(10.0, a, 0.0));
+            }
         }
     }
-    grid.push(triangle(10.0, 0.9, 0.0));
-    for p in [0.0, 0.45, 0.9] {
+    for p in preloads {
         for (frequencies, amplitudes) in [
             (
                 &[0.1, 0.5, 1.0, 5.0, 10.0][..],
@@ -380,6 +429,9 @@ pub enum SynthError {
         /// Time of the step, s.
         t: f64,
     },
+    /// A preload hold a replay cannot run.
+    #[error("preload hold = {0} s must be from 0 to {MAX_PRELOAD_HOLD_S} s")]
+    Hold(f64),
     /// A noise level that is not a fraction.
     #[error("noise = {0} must be finite and in [0, 1) (a share of each test's force range)")]
     Noise(f64),
@@ -389,15 +441,43 @@ pub enum SynthError {
 }
 
 /// One generated record: (time s, displacement mm, force N) per sample,
-/// without noise.
-pub fn record(scene: &Scene, shape: &Shape) -> Result<Vec<[f64; 3]>, SynthError> {
-    let dt = shape.model_dt();
-    let bushing = model::build_at::<f64>(scene, dt).map_err(|source| SynthError::Model {
+/// without noise; a preload held `preload_hold_s` before the test.
+pub fn record(
+    scene: &Scene,
+    shape: &Shape,
+    preload_hold_s: f64,
+) -> Result<Vec<[f64; 3]>, SynthError> {
+    let at = |dt: f64| {
+        model::build_at::<f64>(scene, dt).map_err(|source| SynthError::Model {
+            test: shape.name(),
+            dt,
+            source,
+        })
+    };
+    let refused = |t: f64| SynthError::Refused {
         test: shape.name(),
-        dt,
-        source,
-    })?;
+        t,
+    };
+    let dt = shape.model_dt();
+    let bushing = at(dt)?;
     let mut state = bushing.state_at(0.0);
+    // The lead-in to the preload, at its own steps (built once per step).
+    let lead_in = replay::preload_steps(shape.preload(), preload_hold_s);
+    let mut t = -lead_in.iter().map(|s| s.0).sum::<f64>();
+    let mut built: Vec<(f64, SceneBushing<f64>)> = Vec::new();
+    for (h, x) in lead_in {
+        let b = match built.iter().position(|b| b.0 == h) {
+            Some(i) => &built[i].1,
+            None => {
+                built.push((h, at(h)?));
+                &built[built.len() - 1].1
+            }
+        };
+        t += h;
+        if b.step(&mut state, x).effects.is_none() {
+            return Err(refused(t));
+        }
+    }
     let steps = (shape.duration() / dt).round() as u64;
     let mut rows = Vec::new();
     let mut next_sample = 0.0;
@@ -410,10 +490,7 @@ pub fn record(scene: &Scene, shape: &Shape) -> Result<Vec<[f64; 3]>, SynthError>
         } else {
             let o = bushing.step(&mut state, x);
             if o.effects.is_none() {
-                return Err(SynthError::Refused {
-                    test: shape.name(),
-                    t,
-                });
+                return Err(refused(t));
             }
             o.force
         };
@@ -430,28 +507,33 @@ pub fn record(scene: &Scene, shape: &Shape) -> Result<Vec<[f64; 3]>, SynthError>
 /// Writes `campaign.toml` and one CSV per test of `grid`, generated from
 /// `scene`'s model, into `out`; the force gets Gaussian noise of standard
 /// deviation `noise` times the test's force range (`seed` sets the
-/// draws). Returns the number of samples written.
+/// draws); every preload is held `preload_hold_s` before its test.
+/// Returns the number of samples written.
 pub fn write(
     scene: &Scene,
     grid: &[Shape],
     noise: f64,
     seed: u64,
+    preload_hold_s: f64,
     out: &mut Staged,
 ) -> Result<usize, SynthError> {
     if !(noise.is_finite() && (0.0..1.0).contains(&noise)) {
         return Err(SynthError::Noise(noise));
     }
+    if !(0.0..=MAX_PRELOAD_HOLD_S).contains(&preload_hold_s) {
+        return Err(SynthError::Hold(preload_hold_s));
+    }
     let mut draws = Noise::new(seed);
     let mut toml = format!(
         "# Generated by `bushing-sim campaign` from the model of a scene ({}),\n\
          # force noise {noise} of each test's range, seed {seed}.\n\
-         [campaign]\nname = \"{}\"\n",
+         [campaign]\nname = \"{}\"\npreload_hold_s = {preload_hold_s:?}\n",
         scene.title.replace(['"', '\\', '\n'], " "),
         scene.title.replace(['"', '\\', '\n'], " ")
     );
     let mut samples = 0;
     for shape in grid {
-        let rows = record(scene, shape)?;
+        let rows = record(scene, shape, preload_hold_s)?;
         let (lo, hi) = super::extremes(rows.iter().map(|r| &r[2]));
         let sigma = noise * (hi - lo);
         let name = shape.name();
