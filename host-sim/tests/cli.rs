@@ -26,6 +26,13 @@ fn sim() -> Command {
     c
 }
 
+/// Runs `cmd`, which writes into `out`: a usage error (exit 2) whose
+/// message holds `says`, and nothing at `out`.
+fn refused_usage(cmd: &mut Command, out: &Path, says: &str) {
+    cmd.assert().code(2).stderr(predicate::str::contains(says));
+    assert!(!out.exists(), "{} was written", out.display());
+}
+
 /// `scenes/NAME` with `from` replaced by `to`, written into `dir`.
 fn edited(dir: &Path, name: &str, from: &str, to: &str) -> PathBuf {
     let text = fs::read_to_string(scene(name)).unwrap();
@@ -272,16 +279,17 @@ fn an_output_estimated_beyond_the_limit_is_refused_before_stepping() {
         .unwrap()
         .replacen("cycles = 10", "cycles = 20", 1);
     fs::write(&fast, fast_text).unwrap();
-    sim()
-        .arg("run")
-        .arg(&fast)
-        .arg("--out")
-        .arg(dir.path().join("out"))
-        .timeout(Duration::from_secs(20))
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("more than the limit of 1.0 GiB"));
-    assert!(!dir.path().join("out").exists());
+    let out = dir.path().join("out");
+    refused_usage(
+        sim()
+            .arg("run")
+            .arg(&fast)
+            .arg("--out")
+            .arg(&out)
+            .timeout(Duration::from_secs(20)),
+        &out,
+        "more than the limit of 1.0 GiB",
+    );
     // The limit is the user's: a tiny one refuses the quickstart too.
     sim()
         .args([
@@ -720,15 +728,15 @@ fn preprocess_reports_every_test_and_each_one_left_out() {
     }
     let broken = root().join("tests/campaigns/broken/04-duplicate-name");
     let nothing = dir.path().join("nothing");
-    sim()
-        .arg("preprocess")
-        .arg(&broken)
-        .arg("--out")
-        .arg(&nothing)
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("is named twice"));
-    assert!(!nothing.exists());
+    refused_usage(
+        sim()
+            .arg("preprocess")
+            .arg(&broken)
+            .arg("--out")
+            .arg(&nothing),
+        &nothing,
+        "is named twice",
+    );
 }
 
 /// A replay whose CSV also has a measured force: `run` overlays it on the
@@ -844,15 +852,15 @@ fn identify_writes_a_runnable_model_and_its_report() {
         .code(0);
     assert!(run.join("trace.csv").is_file());
     let refused = dir.path().join("refused");
-    sim()
-        .arg("identify")
-        .arg(&campaign)
-        .args(["--hold-out", "no-such-test", "--out"])
-        .arg(&refused)
-        .assert()
-        .code(2)
-        .stderr(predicate::str::contains("--hold-out no-such-test"));
-    assert!(!refused.exists());
+    refused_usage(
+        sim()
+            .arg("identify")
+            .arg(&campaign)
+            .args(["--hold-out", "no-such-test", "--out"])
+            .arg(&refused),
+        &refused,
+        "--hold-out no-such-test",
+    );
 }
 
 /// `campaign --grid specimen-shear` writes the shear-specimen grid of
