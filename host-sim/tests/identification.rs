@@ -50,8 +50,8 @@ fn model_of(id: &Identification) -> Model {
 /// In class: every test reproduced within 1 % RMS of its force range
 /// against the noise-free force, each Maxwell corner and fraction within
 /// 5 %, the backbone within 1 % of its range over every displacement the
-/// records reach; every parameter determined. The worst energy per cycle
-/// is printed.
+/// records reach, every sine's energy per cycle within 2 %; every
+/// parameter determined.
 #[test]
 fn a_model_of_the_class_is_found_back_from_noisy_records() {
     let dir = tempfile::tempdir().unwrap();
@@ -78,8 +78,12 @@ fn a_model_of_the_class_is_found_back_from_noisy_records() {
             worst = (worst.0, e.abs(), t.name.clone());
         }
     }
-    // The energy per cycle is printed, not asserted: the 2 % of the
-    // acceptance is not met yet (the worst sine is printed).
+    assert!(
+        worst.1 < 0.02,
+        "energy per cycle off by {} on {}",
+        worst.1,
+        worst.2
+    );
     println!(
         "worst RMS {:.4} % of the range, worst energy per cycle {:.4} % ({})",
         100.0 * worst.0,
@@ -326,17 +330,35 @@ fn the_worked_example_is_up_to_date_and_its_three_forms_agree() {
 /// storage, and the noise moves it by about as much.
 #[test]
 fn the_table_3_1_materials_are_found_back_on_the_shear_grid() {
+    table_3_1(synth::Specimen::Shear, "shear", 9, &[0.0, 0.005]);
+}
+
+/// The same on the traction grid of Table B.1 (291 tests: sines from
+/// -0.3 to 0.6 about rest, where the traction law stiffens 17 times
+/// from 0.7 down to -0.3), with 25 knots for the stiffer law; noise-free
+/// only, each identification replaying 81,000 samples.
+#[test]
+fn the_table_3_1_materials_are_found_back_on_the_traction_grid() {
+    table_3_1(synth::Specimen::Traction, "traction", 25, &[0.0]);
+}
+
+/// Table 3.1's m1 and m2 on `specimen`'s grid (holds of 360 s), identified
+/// with a `knots`-knot spline and two x_f cells from records with each
+/// force noise of `noises`: without noise, K′ and K″ within 2 % of the
+/// truth's on every sine and every cell within 2 %; with noise, printed.
+fn table_3_1(specimen: synth::Specimen, name: &str, knots: usize, noises: &[f64]) {
     let class = ModelClass {
+        backbone_size: knots,
         maxwell_cells: 0,
         hysteresis: bushing_sim::identify::class::HysteresisForm::None,
         xf_cells: 2,
         ..ModelClass::default()
     };
-    let grid = synth::specimen_grid(synth::Specimen::Shear, 360.0);
+    let grid = synth::specimen_grid(specimen, 360.0);
     let dir = tempfile::tempdir().unwrap();
     for material in ["m1", "m2"] {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join(format!("../scenes/seed000/{material}-shear-sine-low.toml"));
+            .join(format!("../scenes/seed000/{material}-{name}-sine-low.toml"));
         let scene = Scene::load(&path).unwrap();
         let truth = Model {
             backbone: scene.backbone.clone(),
@@ -344,14 +366,16 @@ fn the_table_3_1_materials_are_found_back_on_the_shear_grid() {
         };
         let here = dir.path().join(material);
         let clean = generate(&here, &scene, &grid, 0.0);
-        for (campaign, noise) in [
-            (clean.clone(), 0.0),
-            (generate(&here, &scene, &grid, 0.005), 0.005),
-        ] {
+        for &noise in noises {
+            let campaign = if noise > 0.0 {
+                generate(&here, &scene, &grid, noise)
+            } else {
+                clean.clone()
+            };
             let id = identify(&campaign, &class, &[]).unwrap();
             let (worst, at) = harmonic_errors(&truth, &model_of(&id), &clean);
             println!(
-                "{material} shear, force noise {noise}: worst K' or K'' error {:.3} % ({at})",
+                "{material} {name}, force noise {noise}: worst K' or K'' error {:.3} % ({at})",
                 100.0 * worst
             );
             if noise > 0.0 {
@@ -370,6 +394,7 @@ fn the_table_3_1_materials_are_found_back_on_the_shear_grid() {
                     (c.g, t.g, "fraction"),
                     (c.x_f, t.x_f, "x_f"),
                 ] {
+                    println!("{material} {name}: {what} {got:.6e} against {want:.6e}");
                     assert!(
                         (got / want - 1.0).abs() < 0.02,
                         "{material}: {what} {got} against {want}"

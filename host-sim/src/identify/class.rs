@@ -5,8 +5,9 @@
 //! `g⁰ = 1 - Σ g` over every cell:
 //!
 //! - **backbone** F^∞: a monotone spline on fixed knots (the parameters
-//!   are the force at the first knot and the logarithms of the rises
-//!   between knots, so every candidate increases) or a polynomial (its
+//!   are the force at one knot, the *anchor*, and the logarithms of the
+//!   rises between knots, each rise moving the knots beyond it away from
+//!   the anchor, so every candidate increases) or a polynomial (its
 //!   coefficients, scaled by the force and displacement ranges);
 //! - **Maxwell cells** (eq 1.8, rate-exact-ramp form): ln ω and ln g each;
 //! - **hysteresis**: an Iwan bank of Jenkins cells in clamp form (eq 1.32:
@@ -96,6 +97,9 @@ pub struct Candidate {
     pub sts: Option<(f64, f64)>,
     /// The x_f cells.
     pub xf: Vec<XfSpec>,
+    /// The spline knot whose force is a parameter of the vector; the
+    /// rises are taken outward from it (unused for a polynomial).
+    pub anchor: usize,
 }
 
 /// What a parameter is, for the report.
@@ -174,7 +178,8 @@ impl Candidate {
         };
         match &self.backbone {
             BackboneSpec::Spline { x, force } => {
-                p(format!("backbone F at {} mm", x[0]), "N", force[0], false);
+                let a = self.anchor.min(x.len().saturating_sub(1));
+                p(format!("backbone F at {} mm", x[a]), "N", force[a], false);
                 for k in 1..x.len() {
                     p(
                         format!("backbone rise {} to {} mm", x[k - 1], x[k]),
@@ -222,7 +227,7 @@ impl Candidate {
     }
 
     /// The scale each linear parameter is divided by in the vector (1 for
-    /// the logarithms): the force range for the spline's first knot, and
+    /// the logarithms): the force range for the spline's anchor, and
     /// `F / X^k` for a polynomial's c_k.
     pub fn scales(&self) -> Vec<f64> {
         let params = self.params();
@@ -269,12 +274,14 @@ impl Candidate {
         };
         let backbone = match &self.backbone {
             BackboneSpec::Spline { x, .. } => {
-                let mut force = Vec::with_capacity(x.len());
-                let mut f = next();
-                force.push(f);
-                for _ in 1..x.len() {
-                    f += next();
-                    force.push(f);
+                let a = self.anchor.min(x.len().saturating_sub(1));
+                let mut force = vec![next(); x.len()];
+                let rises: Vec<f64> = (1..x.len()).map(|_| next()).collect();
+                for k in (0..a).rev() {
+                    force[k] = force[k + 1] - rises[k];
+                }
+                for k in a + 1..x.len() {
+                    force[k] = force[k - 1] + rises[k - 1];
                 }
                 BackboneSpec::Spline {
                     x: x.clone(),
@@ -318,6 +325,87 @@ impl Candidate {
             jenkins,
             sts,
             xf,
+            anchor: self.anchor,
         }
+    }
+
+    /// The same model with the spline's level given at the knot nearest
+    /// 0 mm, where the records about rest pin it.
+    pub fn anchored_at_rest(&self) -> Self {
+        let anchor = match &self.backbone {
+            BackboneSpec::Spline { x, .. } => x
+                .iter()
+                .enumerate()
+                .min_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+                .map_or(0, |(k, _)| k),
+            BackboneSpec::Polynomial { .. } => 0,
+        };
+        Self {
+            anchor,
+            ..self.clone()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spline() -> Candidate {
+        Candidate {
+            backbone: BackboneSpec::Spline {
+                x: vec![-2.0, -1.0, 0.25, 1.0, 2.0],
+                force: vec![-300.0, -120.0, 30.0, 110.0, 260.0],
+            },
+            maxwell: vec![MaxwellSpec::hz(1.0, 0.2)],
+            jenkins: Vec::new(),
+            sts: None,
+            xf: Vec::new(),
+            anchor: 0,
+        }
+    }
+
+    /// Either anchor reads the same model back from its vector, names its
+    /// level at its own knot, and moves only the knots beyond a rise.
+    #[test]
+    fn a_spline_reads_back_from_either_anchor() {
+        let first = spline();
+        let rest = first.anchored_at_rest();
+        assert_eq!(rest.anchor, 2);
+        assert_eq!(first.params()[0].name, "backbone F at -2 mm");
+        assert_eq!(rest.params()[0].name, "backbone F at 0.25 mm");
+        for c in [&first, &rest] {
+            let back = c.with_vector(&c.vector());
+            let (BackboneSpec::Spline { force: a, .. }, BackboneSpec::Spline { force: b, .. }) =
+                (&c.backbone, &back.backbone)
+            else {
+                panic!("not a spline");
+            };
+            for (x, y) in a.iter().zip(b) {
+                assert!((x - y).abs() < 1e-9, "{x} read back as {y}");
+            }
+        }
+        // The first rise (-2 to -1 mm) raised: with the level at rest only
+        // the first knot moves, with the level at the first knot all the
+        // others do.
+        let mut v = rest.vector();
+        v[1] += 0.1;
+        let BackboneSpec::Spline { force, .. } = rest.with_vector(&v).backbone else {
+            panic!("not a spline");
+        };
+        assert!((force[0] + 120.0 + 180.0 * 0.1f64.exp()).abs() < 1e-9);
+        assert!(
+            force[1..]
+                .iter()
+                .zip([-120.0, 30.0, 110.0, 260.0])
+                .all(|(a, b)| (a - b).abs() < 1e-9)
+        );
+        let mut v = first.vector();
+        v[1] += 0.1;
+        let BackboneSpec::Spline { force, .. } = first.with_vector(&v).backbone else {
+            panic!("not a spline");
+        };
+        assert!((force[0] + 300.0).abs() < 1e-9);
+        assert!((force[4] - 260.0 - 180.0 * (0.1f64.exp() - 1.0)).abs() < 1e-9);
     }
 }

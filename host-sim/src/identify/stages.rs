@@ -82,6 +82,15 @@ pub struct Stages {
     pub rate_points: Vec<RatePoint>,
     /// The Maxwell cells, (f Hz, g / g⁰).
     pub maxwell: Vec<(f64, f64)>,
+    /// Where stage 1 saw the backbone (the midlines' and hold ends'
+    /// extreme displacements, mm).
+    pub backbone_span: (f64, f64),
+    /// The sines stage 3 fitted: those whose preload ± amplitude stays
+    /// within `backbone_span` (all of them when fewer than the stage
+    /// needs do).
+    pub rate_sines: Vec<String>,
+    /// The x_f cells, (f Hz, g / g⁰, x_f mm).
+    pub xf: Vec<(f64, f64, f64)>,
     /// The model the stages make.
     pub initial: Candidate,
 }
@@ -101,6 +110,10 @@ pub fn stages(
         points.extend(hs.iter().map(|h| (h.level_mm, h.force_end)));
     }
     points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let backbone_span = (
+        points.first().map_or(0.0, |p| p.0),
+        points.last().map_or(0.0, |p| p.0),
+    );
     let count = match class.backbone {
         BackboneForm::Spline => class.backbone_size.clamp(2, MAX_KNOTS),
         BackboneForm::Polynomial => 2 * class.backbone_size.max(1) + 1,
@@ -168,13 +181,28 @@ pub fn stages(
                 .iter()
                 .map(|&(f, r, x_f)| XfSpec::hz(f, r * g0, x_f))
                 .collect(),
+            anchor: 0,
         }
     };
 
     // Stage 3: the rate-dependent part of every sine.
+    // Only sines about displacements stage 1 saw tell the rate-dependent
+    // part from an error of F^∞: beyond the triangles the long-term
+    // backbone is extrapolated, and a cell fitted there would make up for
+    // it.
+    let needed = class.maxwell_cells.max(2);
+    let inside = |s: &SinePoint| {
+        s.preload_mm - s.amplitude_mm >= backbone_span.0
+            && s.preload_mm + s.amplitude_mm <= backbone_span.1
+    };
+    let mut rate_sines: Vec<&(String, SinePoint)> =
+        p.sines.iter().filter(|(_, s)| inside(s)).collect();
+    if rate_sines.len() < needed {
+        rate_sines = p.sines.iter().collect();
+    }
     let slow = compose(&[], &[]).model();
     let mut rate_points = Vec::new();
-    for (name, s) in &p.sines {
+    for (name, s) in &rate_sines {
         let Some(test) = campaign.tests.iter().find(|t| &t.name == name) else {
             continue;
         };
@@ -192,7 +220,6 @@ pub fn stages(
     let maxwell = if m == 0 {
         Vec::new()
     } else {
-        let needed = m.max(2);
         if rate_points.len() < needed {
             return Err(StageError::NoSines("Maxwell", m, needed, rate_points.len()));
         }
@@ -200,8 +227,7 @@ pub fn stages(
     };
     // Stage 3b: the x_f cells on the sines' harmonics, the Maxwell cells
     // held.
-    let targets: Vec<Target> = p
-        .sines
+    let targets: Vec<Target> = rate_sines
         .iter()
         .filter_map(|(name, s)| {
             let test = campaign.tests.iter().find(|t| &t.name == name)?;
@@ -220,6 +246,9 @@ pub fn stages(
         sts,
         rate_points,
         maxwell,
+        backbone_span,
+        rate_sines: rate_sines.iter().map(|(name, _)| name.clone()).collect(),
+        xf,
         initial,
     })
 }

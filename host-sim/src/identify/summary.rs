@@ -220,6 +220,29 @@ pub fn markdown(id: &Identification, seconds: f64) -> String {
             cells.join(", ")
         );
     }
+    if !id.stages.xf.is_empty() {
+        let cells: Vec<String> = id
+            .stages
+            .xf
+            .iter()
+            .map(|(f, r, x_f)| format!("{f:.4} Hz (g/g⁰ {r:.3}, x_f {x_f:.4} mm)"))
+            .collect();
+        let _ = writeln!(
+            s,
+            "3. x_f cells from {} sines' first harmonics: {}.",
+            id.stages.rate_sines.len(),
+            cells.join(", ")
+        );
+    }
+    let (lo, hi) = id.stages.backbone_span;
+    if id.stages.rate_sines.len() < id.pre.sines.len() {
+        let _ = writeln!(
+            s,
+            "\nStage 3 read the {} of {} sines whose preload ± amplitude stays within {lo:.4} to {hi:.4} mm, where stage 1 saw the backbone.",
+            id.stages.rate_sines.len(),
+            id.pre.sines.len()
+        );
+    }
     let r = &id.refined;
     let _ = writeln!(
         s,
