@@ -216,7 +216,7 @@ impl Candidate {
     }
 
     /// The parameter vector: logarithms, and the linear values over their
-    /// scale ([`Candidate::scale`]).
+    /// scale ([`Candidate::scales`]).
     pub fn vector(&self) -> Vec<f64> {
         let scales = self.scales();
         self.params()

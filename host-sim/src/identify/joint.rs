@@ -346,15 +346,16 @@ fn leg(start: &Candidate, tests: &[Scored], bounds: Bounds, budget: usize) -> Le
 /// the first knot, the whole curve moves while the stages' levels settle,
 /// but the direction that reshapes one interval alone (a level down, the
 /// rise above it up) is a difference of two parameters that small sines
-/// about the preloads pin, and is damped away: on the traction grid the
-/// refinement stalls with sines 12 % off, and on the in-class campaign it
-/// creeps along F^∞'s end for 30 Jacobians. With the level at the knot
-/// nearest 0 mm ([`Candidate::anchored_at_rest`]) that direction is one
-/// parameter; but taken from the stages' model, it lets the out-of-class
-/// campaign's Iwan cells collapse onto one slip force (cost 0.169 against
-/// 0.022). So the refinement runs [`FIRST_KNOT_JACOBIANS`] Jacobians with
-/// the level at the first knot, and the rest of [`MAX_JACOBIANS`] from
-/// there with the level at rest. Neither leg raises the cost.
+/// about the preloads pin, and is damped away: alone, this form leaves the
+/// traction grid's sines up to 15 % off, and the in-class campaign's F^∞
+/// still moving along its -4.5 mm end after 30 Jacobians. With the level
+/// at the knot nearest 0 mm ([`Candidate::anchored_at_rest`]) that
+/// direction is one parameter; but taken from the stages' model, it lets
+/// the out-of-class campaign's Iwan cells collapse towards one slip force
+/// (a held-out sine's energy per cycle 10 % off). So the refinement runs
+/// [`FIRST_KNOT_JACOBIANS`] Jacobians with the level at the first knot,
+/// and the rest of [`MAX_JACOBIANS`] from there with the level at rest.
+/// Neither leg raises the cost.
 pub fn refine(start: &Candidate, tests: &[Scored], bounds: Bounds) -> Refined {
     let (first, last) = match &start.backbone {
         BackboneSpec::Spline { .. } => {
