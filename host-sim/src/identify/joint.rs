@@ -151,7 +151,21 @@ struct Problem<'a> {
     replays: Cell<usize>,
 }
 
-impl Problem<'_> {
+impl<'a> Problem<'a> {
+    /// The problem at `template`'s own vector, allowed `budget` Jacobians.
+    fn new(template: &'a Candidate, tests: &'a [Scored], bounds: Bounds, budget: usize) -> Self {
+        Self {
+            template,
+            bounds,
+            tests,
+            params: DVector::from_vec(template.vector()),
+            cached: RefCell::new(None),
+            jacobians: Cell::new(0),
+            budget,
+            replays: Cell::new(0),
+        }
+    }
+
     fn residuals_at(&self, v: &[f64]) -> DVector<f64> {
         let candidate = self.template.with_vector(v);
         let model = candidate.model();
@@ -302,16 +316,7 @@ struct Leg {
 }
 
 fn leg(start: &Candidate, tests: &[Scored], bounds: Bounds, budget: usize) -> Leg {
-    let problem = Problem {
-        template: start,
-        bounds,
-        tests,
-        params: DVector::from_vec(start.vector()),
-        cached: RefCell::new(None),
-        jacobians: Cell::new(0),
-        budget,
-        replays: Cell::new(0),
-    };
+    let problem = Problem::new(start, tests, bounds, budget);
     let first_cost = problem.residuals().map_or(f64::NAN, |r| r.norm_squared());
     let (problem, report) = LevenbergMarquardt::new()
         .with_ftol(1e-10)
@@ -370,16 +375,7 @@ pub fn refine(start: &Candidate, tests: &[Scored], bounds: Bounds) -> Refined {
         }
         BackboneSpec::Polynomial { .. } => (None, leg(start, tests, bounds, MAX_JACOBIANS)),
     };
-    let problem = Problem {
-        template: &last.model,
-        bounds,
-        tests,
-        params: DVector::from_vec(last.model.vector()),
-        cached: RefCell::new(None),
-        jacobians: Cell::new(0),
-        budget: 0,
-        replays: Cell::new(0),
-    };
+    let problem = Problem::new(&last.model, tests, bounds, 0);
     let cost = last.residuals.norm_squared();
     let j = problem.jacobian_at(&last.residuals);
     let spreads = spreads(&last.model, &j, cost);
