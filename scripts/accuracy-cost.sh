@@ -9,13 +9,15 @@
 #
 # 1. builds and runs the kernel-cost firmware under QEMU for the Cortex-M4F
 #    (thumbv7em-none-eabihf) and the Cortex-M3 (thumbv7m-none-eabi, software
-#    floating point); keeps each output and a copy of each ELF in
+#    floating point), with the bushing-qemu-mix plugin recording the
+#    instructions each measurement executed; keeps each output, mix, ELF and
+#    disassembly (llvm-objdump of rustup's llvm-tools) in
 #    target/accuracy-cost/;
 # 2. runs kalman-peers on the host and on the Cortex-M4F when the firmware
 #    crate has that binary;
 # 3. runs `bushing-sim accuracy-cost` on those files.
 #
-# Needs what scripts/test.sh installs (the two targets, qemu-system-arm;
+# Needs what scripts/test.sh installs (the two targets, llvm-tools, qemu-system-arm;
 # valgrind for the host instruction counts of the full report). Timings are
 # printed, never asserted.
 set -euo pipefail
@@ -34,17 +36,41 @@ esac
 work="$target/accuracy-cost"
 mkdir -p "$work" "$out"
 
+# The executed-instruction mix of each run (estimated cycles): the QEMU
+# plugin of qemu-mix/, and the disassembly of the ELF that ran.
+cargo build -q --release -p bushing-qemu-mix
+plugin="$target/release/libbushing_qemu_mix.so"
+objdump="$(rustc --print sysroot)/lib/rustlib/$(rustc -vV | sed -n 's/^host: //p')/bin/llvm-objdump"
+[ -x "$objdump" ] || { echo "error: no $objdump (rustup component add llvm-tools)" >&2; exit 1; }
+
 kernels=()
 elfs=()
+mixes=()
+disassemblies=()
 for triple in thumbv7em-none-eabihf thumbv7m-none-eabi; do
-    echo "==> kernel-cost on $triple (QEMU)"
+    echo "==> kernel-cost on $triple (QEMU, with the instruction-mix plugin)"
+    case "$triple" in
+        thumbv7em-none-eabihf) machine=(-machine mps2-an386 -cpu cortex-m4) ;;
+        thumbv7m-none-eabi) machine=(-machine mps2-an385 -cpu cortex-m3) ;;
+    esac
+    cargo build -q --release -p bushing-boards --target "$triple" --bin kernel-cost
+    # The ELF that printed these lines (for code sizes, footprint and the
+    # disassembly the mix is mapped onto).
+    elf="$work/kernel-cost-$triple.elf"
+    cp "$target/$triple/release/kernel-cost" "$elf"
     log="$work/kernel-cost-$triple.txt"
-    cargo run -q --release -p bushing-boards --target "$triple" --bin kernel-cost >"$log"
-    # The ELF that printed these lines (for code sizes and footprint).
-    cp "$target/$triple/release/kernel-cost" "$work/kernel-cost-$triple.elf"
+    mix="$work/mix-$triple.txt"
+    rm -f "$log" "$mix"
+    # The runner of .cargo/config.toml, with the plugin.
+    timeout -k 5 300 qemu-system-arm "${machine[@]}" -nographic \
+        -semihosting-config enable=on,target=native -icount shift=0,sleep=off \
+        -plugin "$plugin,elf=$elf,out=$mix" -kernel "$elf" >"$log"
+    "$objdump" -d --no-show-raw-insn "$elf" >"$work/kernel-cost-$triple.dis"
     grep -c '^kernel ' "$log" | sed "s/^/    kernel lines: /"
     kernels+=("$log")
-    elfs+=("$triple=$work/kernel-cost-$triple.elf")
+    elfs+=("$triple=$elf")
+    mixes+=("$triple=$mix")
+    disassemblies+=("$triple=$work/kernel-cost-$triple.dis")
 done
 
 peers=()
@@ -62,7 +88,8 @@ else
 fi
 
 echo "==> bushing-sim accuracy-cost ${mode[*]:-} --out $out"
-args=(accuracy-cost ${mode[@]+"${mode[@]}"} --kernels "${kernels[@]}" --elf "${elfs[@]}")
+args=(accuracy-cost ${mode[@]+"${mode[@]}"} --kernels "${kernels[@]}" --elf "${elfs[@]}"
+    --mix "${mixes[@]}" --disassembly "${disassemblies[@]}")
 if [ ${#peers[@]} -gt 0 ]; then
     args+=(--peers "${peers[@]}")
 fi

@@ -31,13 +31,13 @@ as_root() {
 
 step() { printf '\n==> %s\n' "$*"; }
 
-step "toolchain: Cortex-M targets, clippy, rustfmt"
+step "toolchain: Cortex-M targets, clippy, rustfmt, llvm-tools"
 installed_targets=$(rustup target list --installed)
 for target in thumbv7em-none-eabihf thumbv7m-none-eabi; do
     grep -qx "$target" <<<"$installed_targets" || rustup target add "$target"
 done
 installed_components=$(rustup component list --installed)
-for component in clippy rustfmt; do
+for component in clippy rustfmt llvm-tools; do
     grep -q "^$component" <<<"$installed_components" || rustup component add "$component"
 done
 

@@ -23,6 +23,7 @@
 //! The command's entry point is [`run`] with a [`Command`]; [`generate`]
 //! computes the report from inputs already in memory.
 
+pub mod cycles;
 pub mod families;
 pub mod firmware;
 pub mod host;
@@ -60,6 +61,9 @@ pub enum Error {
     /// A firmware output or ELF file that cannot be read.
     #[error(transparent)]
     Firmware(#[from] firmware::Error),
+    /// An executed-instruction mix that cannot be used.
+    #[error(transparent)]
+    Cycles(#[from] cycles::Error),
     /// Two firmware lines for the same kernel.
     #[error("{origin}: the same kernel as {previous} (target, family, name, n and type)")]
     Duplicate {
@@ -106,6 +110,9 @@ pub enum Error {
         /// Dumps written.
         dumps: usize,
     },
+    /// A `--mix` without a `--disassembly` of the same triple.
+    #[error("--mix {0}=... needs --disassembly {0}=...")]
+    NoDisassembly(String),
     /// An `--elf` value that is not `TRIPLE=PATH`.
     #[error("--elf takes TRIPLE=PATH, not {0}")]
     ElfArgument(String),
@@ -193,6 +200,11 @@ pub struct Row {
     pub m4f_call: Option<f64>,
     /// Cortex-M3 guest instructions per call.
     pub m3: Option<f64>,
+    /// Cortex-M4F estimated cycles per call, net of the call (from the
+    /// executed-instruction mix, [`cycles`]).
+    pub m4f_cycles: Option<f64>,
+    /// Cortex-M3 estimated cycles per call, net of the call.
+    pub m3_cycles: Option<f64>,
     /// Code bytes of the measured function (Cortex-M4F build).
     pub code_bytes: Option<u64>,
     /// State bytes.
@@ -217,6 +229,8 @@ impl Row {
             m4f: None,
             m4f_call: None,
             m3: None,
+            m4f_cycles: None,
+            m3_cycles: None,
             code_bytes: None,
             state_bytes: None,
             params_bytes: None,
@@ -272,6 +286,22 @@ pub struct Inputs {
     pub elfs: Vec<(String, Vec<u8>)>,
     /// `(source name, text)` of `kalman-peers` outputs.
     pub peers: Vec<(String, String)>,
+    /// The executed-instruction mixes of the `kernel-cost` runs.
+    pub mixes: Vec<MixInput>,
+}
+
+/// One target's executed-instruction mix and the disassembly of the ELF
+/// that ran (see [`cycles`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MixInput {
+    /// Triple (or target) of the run.
+    pub triple: String,
+    /// Name of the mix file, for messages.
+    pub source: String,
+    /// The `bushing-qemu-mix` plugin's output.
+    pub mix: String,
+    /// `llvm-objdump -d --no-show-raw-insn` of the ELF.
+    pub disassembly: String,
 }
 
 /// The firmware's footprint.
@@ -340,7 +370,7 @@ pub struct Report {
 }
 
 /// Columns of the CSV.
-pub const CSV_COLUMNS: [&str; 13] = [
+pub const CSV_COLUMNS: [&str; 15] = [
     "family",
     "name",
     "n",
@@ -351,6 +381,8 @@ pub const CSV_COLUMNS: [&str; 13] = [
     "host_instr",
     "m4f_instr",
     "m3_instr",
+    "m4f_cycles",
+    "m3_cycles",
     "code_bytes",
     "state_bytes",
     "params_bytes",
@@ -417,6 +449,8 @@ fn join(
     row.m4f = sum_all(m4f.iter().map(|l| l.as_ref().map(KernelLine::instructions)));
     row.m4f_call = sum_all(m4f.iter().map(|l| l.as_ref().map(|l| l.per_call)));
     row.m3 = sum_all(m3.iter().map(|l| l.as_ref().map(KernelLine::instructions)));
+    row.m4f_cycles = sum_all(m4f.iter().map(|l| l.as_ref().and_then(|l| l.cycles)));
+    row.m3_cycles = sum_all(m3.iter().map(|l| l.as_ref().and_then(|l| l.cycles)));
     let elf = elfs.get("m4f");
     row.code_bytes = sum_bytes(m4f.iter().map(|l| {
         let f = l.as_ref()?.function?;
@@ -432,21 +466,35 @@ fn join(
     row.params_bytes = sum_bytes((0..keys.len()).map(|i| either(i)?.params_bytes));
 }
 
-/// Marks each family's Pareto front over error and M4F instructions: a
-/// row is on it when its error is lower than that of every row of the
-/// family that costs less (or as much, listed before it).
+/// Whether rows are ranked by estimated M4F cycles: every row with an M4F
+/// figure has a cycle estimate (else they are ranked by instructions, so
+/// that one ranking never mixes the two).
+pub fn ranked_by_cycles<'a>(mut rows: impl Iterator<Item = &'a Row>) -> bool {
+    rows.all(|r| r.m4f.is_none() || r.m4f_cycles.is_some())
+}
+
+/// The cost a row is ranked by: estimated M4F cycles, or M4F
+/// instructions ([`ranked_by_cycles`]).
+pub fn rank_cost(r: &Row, cycles: bool) -> Option<f64> {
+    if cycles { r.m4f_cycles } else { r.m4f }
+}
+
+/// Marks each family's Pareto front over error and M4F cost
+/// ([`rank_cost`]): a row is on it when its error is lower than that of
+/// every row of the family that costs less (or as much, listed before it).
 pub fn mark_fronts(rows: &mut [Row]) {
     let families: BTreeSet<String> = rows.iter().map(|r| r.key.family.clone()).collect();
     for family in families {
+        let cycles = ranked_by_cycles(rows.iter().filter(|r| r.key.family == family));
         let mut idx: Vec<usize> = (0..rows.len())
             .filter(|&i| {
                 let r = &rows[i];
                 r.key.family == family
                     && r.error.is_some_and(f64::is_finite)
-                    && r.m4f.is_some_and(|c| c > 0.0)
+                    && rank_cost(r, cycles).is_some_and(|c| c > 0.0)
             })
             .collect();
-        let cost = |i: usize| rows[i].m4f.unwrap_or(f64::INFINITY);
+        let cost = |i: usize| rank_cost(&rows[i], cycles).unwrap_or(f64::INFINITY);
         let err = |i: usize| rows[i].error.unwrap_or(f64::INFINITY);
         idx.sort_by(|&a, &b| cost(a).total_cmp(&cost(b)).then(err(a).total_cmp(&err(b))));
         let mut best = f64::INFINITY;
@@ -486,6 +534,11 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
     let mut all = Vec::new();
     for (source, text) in &inputs.kernels {
         all.extend(firmware::parse_kernels(source, text)?);
+    }
+    for m in &inputs.mixes {
+        let mix = cycles::Mix::parse(&m.source, &m.mix)?;
+        let dis = cycles::Disassembly::parse(&m.disassembly);
+        cycles::attach(&mut all, &firmware::target_of_triple(&m.triple), &mix, &dis)?;
     }
     let mut lines = Lines::new(all)?;
     let mut elfs = BTreeMap::new();
@@ -574,6 +627,12 @@ fn inputs_summary(inputs: &Inputs) -> Vec<String> {
     out.extend(inputs.elfs.iter().map(|(t, _)| format!("ELF: {t}")));
     out.extend(
         inputs
+            .mixes
+            .iter()
+            .map(|m| format!("instruction mix: `{}` ({})", m.source, m.triple)),
+    );
+    out.extend(
+        inputs
             .peers
             .iter()
             .map(|(s, _)| format!("peer lines: `{s}`")),
@@ -618,6 +677,11 @@ pub struct Command {
     pub elf: Vec<(String, PathBuf)>,
     /// `--peers FILE...`: outputs of `kalman-peers`.
     pub peers: Vec<PathBuf>,
+    /// `--mix TRIPLE=PATH...`: executed-instruction mixes.
+    pub mix: Vec<(String, PathBuf)>,
+    /// `--disassembly TRIPLE=PATH...`: the disassembly of each ELF with a
+    /// mix.
+    pub disassembly: Vec<(String, PathBuf)>,
     /// `--out DIR`: where `accuracy-cost.{md,csv,svg}` go.
     pub out: PathBuf,
 }
@@ -654,10 +718,24 @@ impl Command {
             })?;
             elfs.push((triple.clone(), bytes));
         }
+        let mut mixes = Vec::with_capacity(self.mix.len());
+        for (triple, path) in &self.mix {
+            let Some((_, dis)) = self.disassembly.iter().find(|(t, _)| t == triple) else {
+                return Err(Error::NoDisassembly(triple.clone()));
+            };
+            let (source, mix) = text(path)?;
+            mixes.push(MixInput {
+                triple: triple.clone(),
+                source,
+                mix,
+                disassembly: text(dis)?.1,
+            });
+        }
         Ok(Inputs {
             kernels: self.kernels.iter().map(text).collect::<Result<_, _>>()?,
             elfs,
             peers: self.peers.iter().map(text).collect::<Result<_, _>>()?,
+            mixes,
         })
     }
 }

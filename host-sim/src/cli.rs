@@ -290,6 +290,15 @@ pub struct AccuracyCostArgs {
     /// Outputs of `kalman-peers`.
     #[arg(long, num_args = 1.., value_name = "FILE")]
     peers: Vec<PathBuf>,
+    /// Executed-instruction mixes of the `kernel-cost` runs (the
+    /// `bushing-qemu-mix` plugin's output), as TRIPLE=PATH: estimated
+    /// cycles.
+    #[arg(long, num_args = 1.., value_name = "TRIPLE=PATH", value_parser = elf_argument)]
+    mix: Vec<(String, PathBuf)>,
+    /// `llvm-objdump -d --no-show-raw-insn` of each ELF with a mix, as
+    /// TRIPLE=PATH.
+    #[arg(long, num_args = 1.., value_name = "TRIPLE=PATH", value_parser = elf_argument)]
+    disassembly: Vec<(String, PathBuf)>,
     /// Where accuracy-cost.{md,csv,svg} go.
     #[arg(long)]
     out: PathBuf,
@@ -463,6 +472,8 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
                 kernels: a.kernels,
                 elf: a.elf,
                 peers: a.peers,
+                mix: a.mix,
+                disassembly: a.disassembly,
                 out: a.out,
             };
             let text = accuracy_cost::run(&command).map_err(|e| CliError::Failed(e.to_string()))?;

@@ -14,7 +14,7 @@ const KERNELS_M4F: &str = "\
 # kernel cost, 2000 calls each, sine 2 mm over 100 samples, dt = 0.0005 s
 kernel target=m4f type=f32 family=maxwell name=rate-exact-ramp/plain n=8 per_call=120.0 net=112.0 state_bytes=32 params_bytes=448 fn=0x000019a4
 kernel target=m4f type=f32 family=maxwell name=rate-exact-ramp/plain n=1 per_call=39.0 net=30.9 state_bytes=4 params_bytes=80 fn=0x00002c74
-kernel target=m4f type=f32 family=maxwell name=rate-midpoint/plain n=4 per_call=68.0 net=60.0 state_bytes=16 params_bytes=240 fn=0x00000c6c
+kernel target=m4f type=f32 family=maxwell name=rate-midpoint/plain n=4 per_call=68.0 net=60.0 state_bytes=16 params_bytes=240 fn=0x00000c6c calls=10 windows=0,1,2
 kernel target=m4f type=f32 family=maxwell name=load-explicit/plain n=16 per_call=331.0 net=323.0 state_bytes=64 params_bytes=864 fn=0x00001d9c
 kernel target=m4f type=f32 family=maxwell-force name=rate-exact-ramp/plain n=8 per_call=71.0 net=69.9 state_bytes=32 params_bytes=448 fn=0x00007a5c
 kernel target=m4f type=f32 family=maxwell-force name=rate-exact-ramp/multiplied n=8 per_call=65.0 net=64.0 state_bytes=32 params_bytes=448 fn=0x00006ce0
@@ -42,8 +42,42 @@ kalman name=bushing-ekf crate=bushing filter=ekf cost=1388 unit=instructions fre
 kalman name=peer-ekf crate=some-kalman@0.3.1 filter=ekf cost=5000 unit=instructions freq_err_pct=0.004 damp_err_pts=0.003 amp_rms=0.02
 ";
 
+/// The executed-instruction mix of three windows: the kernel (a loop of
+/// 5 instructions run 10 times), its empty stand-in and the baseline.
+const MIX_M4F: &str = "\
+qemu-mix 1 open=0x00000400 close=0x00000408
+window 0 insns=50 blocks=1
+tb 0x00000100 0x00000110 5 10 9
+window 1 insns=20 blocks=1
+tb 0x00000200 0x00000204 2 10 10
+window 2 insns=10 blocks=1
+tb 0x00000300 0x00000302 1 10 10
+end windows=3
+";
+
+/// The disassembly the mix runs through, as llvm-objdump prints it.
+const DISASSEMBLY_M4F: &str = "
+00000100 <kernel>:
+     100:      \tvldr\ts0, [r0]
+     104:      \tvmla.f32\ts1, s0, s2
+     108:      \tvmla.f32\ts1, s3, s4
+     10c:      \tsubs\tr0, #0x1
+     10e:      \tbne\t0x100 <kernel>
+00000200 <empty>:
+     200:      \tnop
+     202:      \tbx\tlr
+00000300 <baseline>:
+     300:      \tb\t0x300 <baseline>
+";
+
 fn inputs() -> Inputs {
     Inputs {
+        mixes: vec![accuracy_cost::MixInput {
+            triple: "thumbv7em-none-eabihf".into(),
+            source: "mix.txt".into(),
+            mix: MIX_M4F.into(),
+            disassembly: DISASSEMBLY_M4F.into(),
+        }],
         kernels: vec![
             ("m4f.txt".into(), KERNELS_M4F.into()),
             ("m3.txt".into(), KERNELS_M3.into()),
@@ -136,7 +170,7 @@ fn quick_report_has_every_part() {
     assert!(joined[4].parse::<f64>().is_ok_and(|e| e > 0.0 && e < 0.01));
     assert_eq!(joined[8], "112");
     assert_eq!(joined[9], "2490");
-    assert_eq!(joined[11], "32");
+    assert_eq!(joined[13], "32");
 
     // The plot.
     plot::well_formed(&report.svg).expect("well-formed SVG");
@@ -168,14 +202,12 @@ fn pareto_fronts_are_not_dominated() {
     let mut fronts = 0;
     for p in report.rows.iter().filter(|r| r.front) {
         fronts += 1;
-        let (pe, pc) = (p.error.unwrap_or(f64::NAN), p.m4f.unwrap_or(f64::NAN));
-        for q in report
-            .rows
-            .iter()
-            .filter(on_plot)
-            .filter(|q| q.key.family == p.key.family)
-        {
-            let (qe, qc) = (q.error.unwrap_or(f64::NAN), q.m4f.unwrap_or(f64::NAN));
+        let family = || report.rows.iter().filter(|q| q.key.family == p.key.family);
+        let cycles = accuracy_cost::ranked_by_cycles(family());
+        let cost = |r: &accuracy_cost::Row| accuracy_cost::rank_cost(r, cycles).unwrap_or(f64::NAN);
+        let (pe, pc) = (p.error.unwrap_or(f64::NAN), cost(p));
+        for q in family().filter(on_plot) {
+            let (qe, qc) = (q.error.unwrap_or(f64::NAN), cost(q));
             if qc < pc {
                 assert!(
                     pe < qe,
@@ -212,6 +244,73 @@ fn targets_are_judged_from_the_firmware_lines() {
     // 1388 against 5000 at equal or better accuracy: 0.28 <= 1/3.
     let third = goal("1/3");
     assert!(third.met(), "{third:?}");
+}
+
+#[test]
+fn estimated_cycles_come_from_the_instruction_mix() {
+    let report = quick();
+    let row = report
+        .rows
+        .iter()
+        .find(|r| {
+            r.key.family == "maxwell"
+                && r.key.name == "rate-midpoint/plain"
+                && r.key.n == 4
+                && r.key.number == "f32"
+        })
+        .expect("the mixed row");
+    // Kernel window: (vldr 2 + vmla 3 + vmla 3 with its accumulator just
+    // written, +1 + subs 1 + bne 1) x 10 + 9 taken x 2 = 128; empty: (1 +
+    // 1) x 10 + 10 x 2 = 40; baseline: 1 x 10 + 10 x 2 = 30.
+    assert_eq!(row.m4f_cycles, Some((128.0 - 40.0) / 10.0));
+    // The instructions become the mix's exact counts: (50 - 20) / 10.
+    assert_eq!(row.m4f, Some(3.0));
+    // A row without windows has no estimate, and the family is then
+    // ranked by instructions.
+    let other = report
+        .rows
+        .iter()
+        .find(|r| r.key.family == "maxwell" && r.key.n == 8 && r.key.number == "f32")
+        .expect("an unmixed row");
+    assert_eq!(other.m4f_cycles, None);
+    assert!(!accuracy_cost::ranked_by_cycles(
+        report.rows.iter().filter(|r| r.key.family == "maxwell")
+    ));
+    assert!(report.markdown.contains("M4F cycles"));
+}
+
+#[test]
+fn broken_mixes_are_named_errors() {
+    let with_mix = |mix: &str, dis: &str| {
+        let mut i = inputs();
+        i.mixes[0].mix = mix.into();
+        i.mixes[0].disassembly = dis.into();
+        accuracy_cost::generate(&i, &Options::quick())
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
+    };
+    // A run that did not finish.
+    let e = with_mix(&MIX_M4F.replace("end windows=3\n", ""), DISASSEMBLY_M4F);
+    assert!(e.contains("mix.txt") && e.contains("no 'end' line"), "{e}");
+    // A window the line names but the mix lacks.
+    let short = MIX_M4F
+        .replace(
+            "window 2 insns=10 blocks=1\ntb 0x00000300 0x00000302 1 10 10\n",
+            "",
+        )
+        .replace("windows=3", "windows=2");
+    let e = with_mix(&short, DISASSEMBLY_M4F);
+    assert!(e.contains("no window 2"), "{e}");
+    // A disassembly of another build.
+    let e = with_mix(MIX_M4F, &DISASSEMBLY_M4F.replace("     100:", "      f0:"));
+    assert!(e.contains("0x100"), "{e}");
+    // A garbled line, by number.
+    let e = with_mix(
+        &MIX_M4F.replace("tb 0x00000200", "tb 0x0000020z"),
+        DISASSEMBLY_M4F,
+    );
+    assert!(e.contains("mix.txt:5"), "{e}");
 }
 
 #[test]

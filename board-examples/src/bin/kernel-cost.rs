@@ -41,7 +41,7 @@ mod firmware {
         Exponentials, IwanBank, IwanSliders, MaxwellBank, OscillatorState, OscillatorStep,
         ShiftFactor,
     };
-    use bushing_boards::probe::{self, INSTRUCTIONS_PER_TICK, ticks};
+    use bushing_boards::probe::{self, INSTRUCTIONS_PER_TICK, Span, span as ticks};
     use bushing_kernels::{
         DT, IwanOscillator, MountEffects, berg, bouc_wen, composite, dahl, default_bushing, drives,
         engine_mount, grunwald, iwan_bank, iwan_oscillator, jenkins, maxwell_bank, mount_motion,
@@ -79,12 +79,13 @@ mod firmware {
     /// (`baseline`), over `calls` passes: `per_call` counts the call, the
     /// return and the harness's use of the result; `net` only what the
     /// kernel itself adds (what it costs inlined into a control loop).
-    fn report(line: &Line<'_>, t: u32, empty: u32, baseline: u32, calls: usize) {
+    fn report(line: &Line<'_>, t: Span, empty: Span, baseline: Span, calls: usize) {
         let tenths = |ticks: u32| ticks * INSTRUCTIONS_PER_TICK * 10 / calls.max(1) as u32;
-        let gross = tenths(t.saturating_sub(baseline));
-        let net = tenths(t.saturating_sub(empty));
+        let gross = tenths(t.ticks.saturating_sub(baseline.ticks));
+        let net = tenths(t.ticks.saturating_sub(empty.ticks));
+        let window = |s: Span| s.window.map_or(-1, |w| w as i64);
         hprintln!(
-            "kernel target={} type={} family={} name={} n={} per_call={}.{} net={}.{} state_bytes={} params_bytes={} fn={:#010x}",
+            "kernel target={} type={} family={} name={} n={} per_call={}.{} net={}.{} state_bytes={} params_bytes={} fn={:#010x} calls={} windows={},{},{}",
             TARGET,
             line.number,
             line.family,
@@ -96,7 +97,11 @@ mod firmware {
             net % 10,
             line.state_bytes,
             line.params_bytes,
-            line.function & !1
+            line.function & !1,
+            calls,
+            window(t),
+            window(empty),
+            window(baseline)
         );
     }
 
@@ -136,7 +141,7 @@ mod firmware {
         e: &E,
         drives: &[Drive<T>],
         kernel: fn(&E, &mut E::State, &Drive<T>) -> R,
-    ) -> u32 {
+    ) -> Span {
         let mut s = e.rest(T::ZERO);
         ticks(|| {
             for d in drives {
@@ -150,7 +155,7 @@ mod firmware {
     fn effect_cost<T: Real, E: Effect<T>, R, S>(
         (family, name, n): (&str, &str, usize),
         e: &E,
-        (drives, baseline): (&[Drive<T>], u32),
+        (drives, baseline): (&[Drive<T>], Span),
         kernel: fn(&E, &mut E::State, &Drive<T>) -> R,
         empty: fn(&E, &mut E::State, &Drive<T>) -> S,
     ) {
@@ -174,7 +179,7 @@ mod firmware {
         label: (&str, &str, usize),
         e: &E,
         drives: &[Drive<T>],
-        baseline: u32,
+        baseline: Span,
     ) {
         let kernel = effect_force::<T, E>;
         effect_cost(label, e, (drives, baseline), kernel, force_empty::<T, E>);
@@ -185,7 +190,7 @@ mod firmware {
         label: (&str, &str, usize),
         e: &E,
         drives: &[Drive<T>],
-        baseline: u32,
+        baseline: Span,
     ) {
         let kernel = effect_step::<T, E>;
         effect_cost(label, e, (drives, baseline), kernel, effect_empty::<T, E>);
@@ -219,7 +224,7 @@ mod firmware {
         (family, name, n): (&str, &str, usize),
         b: &Bushing<T, B, E>,
         xs: &[T],
-        baseline: u32,
+        baseline: Span,
     ) {
         type Kernel<T, B, E> =
             fn(&Bushing<T, B, E>, &mut BushingState<T, <E as Effect<T>>::State>, T) -> [T; 3];
@@ -258,7 +263,7 @@ mod firmware {
     fn maxwell<T: Real, const N: usize, A: Accumulator<T>>(
         storage: &str,
         drives: &[Drive<T>],
-        baseline: u32,
+        baseline: Span,
     ) {
         for form in MaxwellForm::ALL {
             let Ok(bank) = maxwell_bank::<T, N, A>(form) else {
@@ -274,7 +279,7 @@ mod firmware {
     }
 
     /// Maxwell banks of 1 to 16 cells in every storage.
-    fn maxwell_orders<T: Real>(drives: &[Drive<T>], baseline: u32) {
+    fn maxwell_orders<T: Real>(drives: &[Drive<T>], baseline: Span) {
         maxwell::<T, 1, Plain<T>>("plain", drives, baseline);
         maxwell::<T, 2, Plain<T>>("plain", drives, baseline);
         maxwell::<T, 4, Plain<T>>("plain", drives, baseline);
@@ -292,7 +297,7 @@ mod firmware {
         maxwell::<T, 16, Compensated<T>>("compensated", drives, baseline);
     }
 
-    fn iwan<T: Real, const N: usize>(drives: &[Drive<T>], baseline: u32) {
+    fn iwan<T: Real, const N: usize>(drives: &[Drive<T>], baseline: Span) {
         let Ok(bank) = iwan_bank::<T, N>() else {
             fail()
         };
@@ -300,7 +305,7 @@ mod firmware {
     }
 
     /// Iwan banks of 1 to 64 cells.
-    fn iwan_orders<T: Real>(drives: &[Drive<T>], baseline: u32) {
+    fn iwan_orders<T: Real>(drives: &[Drive<T>], baseline: Span) {
         iwan::<T, 1>(drives, baseline);
         iwan::<T, 2>(drives, baseline);
         iwan::<T, 4>(drives, baseline);
@@ -400,7 +405,7 @@ mod firmware {
         }
     }
 
-    fn grunwald_cost<const N: usize>(xs: &[f32], baseline: u32) {
+    fn grunwald_cost<const N: usize>(xs: &[f32], baseline: Span) {
         let Ok(b) = grunwald::<N>() else { fail() };
         whole(("grunwald", "bushing/alpha-0.5", N), &b, xs, baseline);
     }
@@ -748,7 +753,7 @@ mod firmware {
             params_bytes: size_of_val(&record),
             function: fit as *const () as usize,
         };
-        report(&line, t, 0, 0, calls);
+        report(&line, t, Span::NONE, Span::NONE, calls);
     }
 
     /// A short fixed-capacity name.

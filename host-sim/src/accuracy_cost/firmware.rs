@@ -116,6 +116,17 @@ pub struct KernelLine {
     pub params_bytes: Option<u64>,
     /// `fn=`: address of the measured function (0: none).
     pub function: Option<u64>,
+    /// `calls=`: calls measured.
+    pub calls: Option<u64>,
+    /// `windows=T,E,B`: the numbers of the probe windows of the kernel,
+    /// its empty stand-in and the harness baseline (`-1`: none), for the
+    /// executed-instruction mix.
+    pub windows: Option<[Option<u32>; 3]>,
+    /// Estimated cycles per call, net of the call (from the mix), when a
+    /// mix was given for the line's target.
+    pub cycles: Option<f64>,
+    /// Estimated cycles per call, call included.
+    pub cycles_call: Option<f64>,
     /// Every key of the line, as printed.
     pub fields: BTreeMap<String, String>,
     /// `file:line`, for messages.
@@ -229,6 +240,28 @@ fn optional_integer(
     f.get(key).map(|t| integer(t, key)).transpose()
 }
 
+/// `windows=T,E,B`: three window numbers, `-1` for none.
+fn windows(f: &BTreeMap<String, String>) -> Result<Option<[Option<u32>; 3]>, LineProblem> {
+    let Some(text) = f.get("windows") else {
+        return Ok(None);
+    };
+    let bad = || LineProblem::NotInteger {
+        key: "windows",
+        text: text.clone(),
+    };
+    let parts: Vec<Option<u32>> = text
+        .split(',')
+        .map(|w| match w {
+            "-1" => Ok(None),
+            _ => w.parse().map(Some).map_err(|_| bad()),
+        })
+        .collect::<Result<_, _>>()?;
+    let [t, e, b] = parts[..] else {
+        return Err(bad());
+    };
+    Ok(Some([t, e, b]))
+}
+
 /// One `kernel ...` line's words (after the leading word).
 fn kernel_line(rest: &str, origin: String) -> Result<KernelLine, LineProblem> {
     let f = fields(rest)?;
@@ -245,6 +278,10 @@ fn kernel_line(rest: &str, origin: String) -> Result<KernelLine, LineProblem> {
         state_bytes: optional_integer(&f, "state_bytes")?,
         params_bytes: optional_integer(&f, "params_bytes")?,
         function: optional_integer(&f, "fn")?,
+        calls: optional_integer(&f, "calls")?,
+        windows: windows(&f)?,
+        cycles: None,
+        cycles_call: None,
         fields: f,
         origin,
     })

@@ -8,7 +8,7 @@ use std::fmt::Write;
 use super::families::THRESHOLD;
 use super::firmware::{Elf, KernelLine, PeerLine};
 use super::plot::{self, Point};
-use super::{CSV_COLUMNS, Footprint, Goal, Key, Lines, Options, Row};
+use super::{CSV_COLUMNS, Footprint, Goal, Key, Lines, Options, Row, rank_cost, ranked_by_cycles};
 use crate::markdown::{Table, cell};
 
 /// How the report was made.
@@ -43,6 +43,17 @@ fn num(v: Option<f64>, decimals: usize) -> String {
     v.map_or_else(|| "-".into(), |v| format!("{v:.decimals$}"))
 }
 
+/// Estimated cycles with the instructions in brackets; the instructions
+/// alone when there is no cycle estimate.
+fn cycles_instr(cycles: Option<f64>, instr: Option<f64>, decimals: usize) -> String {
+    match (cycles, instr) {
+        (Some(c), Some(i)) => format!("{c:.decimals$} ({i:.decimals$})"),
+        (None, Some(i)) => format!("- ({i:.decimals$})"),
+        (Some(c), None) => format!("{c:.decimals$}"),
+        (None, None) => "-".into(),
+    }
+}
+
 fn bytes(v: Option<u64>) -> String {
     v.map_or_else(|| "-".into(), |v| v.to_string())
 }
@@ -51,7 +62,7 @@ fn bytes(v: Option<u64>) -> String {
 const CHEAPEST_COLUMNS: [&str; 5] = [
     "configuration",
     "error",
-    "M4F instr",
+    "M4F cycles (instr)",
     "host ns",
     "error measure",
 ];
@@ -59,6 +70,12 @@ const CHEAPEST_COLUMNS: [&str; 5] = [
 /// A line of the M4F output, for the targets.
 fn m4f<'a>(lines: &'a mut Lines, family: &str, name: &str, n: usize) -> Option<&'a KernelLine> {
     lines.get("m4f", &Key::new(family, name, n, "f32"))
+}
+
+/// The estimated cycles of a target's line, for its note.
+fn cycles_note(l: &KernelLine) -> String {
+    l.cycles
+        .map_or_else(String::new, |c| format!("; estimated {} cycles", sig(c)))
 }
 
 /// A per-cell target from a bank line.
@@ -71,9 +88,10 @@ fn per_cell(lines: &mut Lines, what: &str, limit: f64, key: (&str, &str, usize))
         |l| {
             format!(
                 "`family={family} name={name} n={n}`: {} per call net of the call over {n} cells \
-                 ({:.2} per cell with the call)",
+                 ({:.2} per cell with the call){}",
                 sig(l.instructions()),
-                l.per_call / n as f64
+                l.per_call / n as f64,
+                cycles_note(l)
             )
         },
     );
@@ -96,8 +114,9 @@ fn per_call(lines: &mut Lines, what: &str, limit: f64, key: (&str, &str, usize))
             || format!("no `{family} {name}` line from the M4F firmware"),
             |l| {
                 format!(
-                    "`family={family} name={name}`, net of the call ({} with it)",
-                    sig(l.per_call)
+                    "`family={family} name={name}`, net of the call ({} with it){}",
+                    sig(l.per_call),
+                    cycles_note(l)
                 )
             },
         ),
@@ -292,9 +311,14 @@ fn cheapest<'a>(rows: impl Iterator<Item = &'a Row> + Clone) -> Option<(&'a Row,
             ka.0.total_cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
         })
     };
-    by(|r| r.m4f)
-        .map(|r| (r, true))
-        .or_else(|| by(|r| r.host_ns).map(|r| (r, false)))
+    let cycles = ranked_by_cycles(within.clone());
+    by(if cycles {
+        |r: &Row| r.m4f_cycles
+    } else {
+        |r: &Row| r.m4f
+    })
+    .map(|r| (r, true))
+    .or_else(|| by(|r| r.host_ns).map(|r| (r, false)))
 }
 
 fn cheapest_line(table: &mut Table, label: &str, rows: &[&Row]) {
@@ -313,7 +337,10 @@ fn cheapest_line(table: &mut Table, label: &str, rows: &[&Row]) {
             config(r),
             pct(r.error),
             if on_m4f {
-                sig(r.m4f.unwrap_or(f64::NAN))
+                match r.m4f_cycles {
+                    Some(c) => format!("{} ({})", sig(c), sig(r.m4f.unwrap_or(f64::NAN))),
+                    None => format!("- ({})", sig(r.m4f.unwrap_or(f64::NAN))),
+                }
             } else {
                 "- (not on M4F)".into()
             },
@@ -422,6 +449,8 @@ fn row_table(rows: &[&Row], with_family: bool) -> String {
         "error",
         "M4F instr",
         "M3 instr",
+        "M4F cycles",
+        "M3 cycles",
         "host ns",
         "host instr",
         "code B",
@@ -442,6 +471,8 @@ fn row_table(rows: &[&Row], with_family: bool) -> String {
             pct(r.error),
             num(r.m4f, 1),
             num(r.m3, 1),
+            num(r.m4f_cycles, 1),
+            num(r.m3_cycles, 1),
             num(r.host_ns, 1),
             num(r.host_instr, 1),
             bytes(r.code_bytes),
@@ -487,7 +518,8 @@ fn maxwell_pivot(s: &mut String, rows: &[Row], number: &str) {
     };
     let _ = writeln!(
         s,
-        "\n{label}: entry `error / M4F full step / M4F force-only / host ns full step`\n"
+        "\n{label}: entry `error / M4F full step / M4F force-only / host ns full step`, M4F \
+         figures as estimated cycles (instructions)\n"
     );
     let mut table = Table::new(
         std::iter::once("form/state".to_string()).chain(ns.iter().map(|n| format!("N = {n}"))),
@@ -503,8 +535,8 @@ fn maxwell_pivot(s: &mut String, rows: &[Row], number: &str) {
                         "{}{} / {} / {} / {}",
                         pct(r.error),
                         if r.front { " (front)" } else { "" },
-                        num(r.m4f, 0),
-                        num(f.and_then(|f| f.m4f), 0),
+                        cycles_instr(r.m4f_cycles, r.m4f, 0),
+                        cycles_instr(f.and_then(|f| f.m4f_cycles), f.and_then(|f| f.m4f), 0),
                         num(r.host_ns, 1)
                     )
                 },
@@ -536,7 +568,8 @@ pub(super) fn markdown(
          Generated by `scripts/accuracy-cost.sh` (one command: it builds and runs the `kernel-cost`\n\
          firmware under QEMU for the Cortex-M4F and the Cortex-M3, and `kalman-peers` where it\n\
          exists, then runs `cargo run --release -p bushing-sim -- accuracy-cost --kernels FILE...\n\
-         --elf TRIPLE=PATH... [--peers FILE...] --out docs`). `scripts/accuracy-cost.sh --quick`\n\
+         --elf TRIPLE=PATH... --mix TRIPLE=PATH... --disassembly TRIPLE=PATH... [--peers FILE...]\n\
+         --out docs`). `scripts/accuracy-cost.sh --quick`\n\
          runs every code path faster and writes to `target/accuracy-cost/quick/`. Do not edit:\n\
          regenerate.\n\n\
          Mode: {mode}. Inputs: {}.\n\n\
@@ -545,13 +578,21 @@ pub(super) fn markdown(
          - **M4F / M3 instr**: guest instructions per call on Cortex-M4F / Cortex-M3 (software\n  \
            floating point) in QEMU with `-icount shift=0`, read from SysTick over 2000 calls, net of\n  \
            the call when the firmware prints it (`net=`, what the kernel costs inlined in a control\n  \
-           loop), else with it (`per_call=`). QEMU counts instructions, not cycles.\n\
+           loop), else with it (`per_call=`); exact counts from the instruction mix where one was\n  \
+           given, else read from SysTick (one tick per 40 instructions).\n\
+         - **M4F / M3 cycles**: estimated Cortex-M4 / Cortex-M3 cycles per call, net of the call: the\n  \
+           instructions each measurement executed in QEMU (the `bushing-qemu-mix` plugin), each\n  \
+           weighed by the timing tables of the core's Technical Reference Manual, with a result\n  \
+           stall for an FPU result read by the next instruction, pipelined neighbouring loads, and a\n  \
+           pipeline refill of {refill} cycles per taken branch; zero-wait-state memory assumed (the model\n  \
+           and its assumptions: `bushing_sim::accuracy_cost::cycles`). Pareto fronts and the\n  \
+           cheapest-configuration tables rank by M4F cycles where the report has them.\n\
          - **host ns**: ns per call on this machine, median of {} runs of {} calls (a timing loop,\n  \
            not a benchmark harness: `cargo bench -p bushing-sim --bench kernels` runs divan).\n\
          - **host instr**: host instructions per call under valgrind's callgrind{}.\n\
          - **code B**: size of the measured non-inlined function in the M4F firmware's symbol table;\n  \
            **state B / params B**: `size_of` the state and of the parameters, as the firmware prints.\n\
-         - **front**: on its family's Pareto front of error against M4F instructions (no cheaper\n  \
+         - **front**: on its family's Pareto front of error against M4F cycles (no cheaper\n  \
            configuration of the family is as accurate).\n",
         if ctx.inputs.is_empty() {
             "none (host figures only)".to_string()
@@ -564,7 +605,8 @@ pub(super) fn markdown(
             ""
         } else {
             " (not run: quick mode, or valgrind not found)"
-        }
+        },
+        refill = super::cycles::REFILL,
     );
 
     if !ctx.warnings.is_empty() {
@@ -578,8 +620,8 @@ pub(super) fn markdown(
     }
     let _ = writeln!(
         s,
-        "## Targets\n\nThe issue's bounds, in guest instructions on the Cortex-M4F: {} of {} \
-         met.\n",
+        "## Targets\n\nThe bounds of the issues that set them, in guest instructions on the \
+         Cortex-M4F (each note gives the estimated cycles beside): {} of {} met.\n",
         goals.iter().filter(|g| g.met()).count(),
         goals.len()
     );
@@ -598,8 +640,8 @@ pub(super) fn markdown(
     let _ = writeln!(
         s,
         "\n## Cheapest configuration within 1 % error\n\n\
-         Per family, the configuration of least M4F instructions per call whose error is at most\n\
-         1 % (host ns where no such configuration has an M4F figure).\n"
+         Per family, the configuration of least M4F cycles per call (instructions without a mix)\n\
+         whose error is at most 1 % (host ns where no such configuration has an M4F figure).\n"
     );
     let mut table = Table::new(std::iter::once("family").chain(CHEAPEST_COLUMNS));
     for family in families(rows) {
@@ -633,7 +675,7 @@ pub(super) fn markdown(
 
     let _ = writeln!(
         s,
-        "\n## Error against cost\n\n![error against M4F instructions](accuracy-cost.svg)\n\n\
+        "\n## Error against cost\n\n![error against M4F cycles](accuracy-cost.svg)\n\n\
          Every configuration with an error and an M4F figure; each family's Pareto front is the\n\
          step line through its ringed points. Errors of the different families measure different\n\
          things (see each family): compare within a family.\n"
@@ -722,6 +764,8 @@ pub(super) fn markdown(
             "type",
             "M4F instr",
             "M3 instr",
+            "M4F cycles",
+            "M3 cycles",
             "M4F with the call",
             "state B",
             "params B",
@@ -741,6 +785,8 @@ pub(super) fn markdown(
                 key.number.clone(),
                 a.map_or_else(|| "-".into(), |l| sig(l.instructions())),
                 b.map_or_else(|| "-".into(), |l| sig(l.instructions())),
+                a.and_then(|l| l.cycles).map_or_else(|| "-".into(), sig),
+                b.and_then(|l| l.cycles).map_or_else(|| "-".into(), sig),
                 a.map_or_else(|| "-".into(), |l| sig(l.per_call)),
                 bytes(any.and_then(|l| l.state_bytes)),
                 bytes(any.and_then(|l| l.params_bytes)),
@@ -854,6 +900,8 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             r.host_instr.map_or_else(String::new, |v| format!("{v:.1}")),
             csv_num(r.m4f),
             csv_num(r.m3),
+            csv_num(r.m4f_cycles),
+            csv_num(r.m3_cycles),
             csv_bytes(r.code_bytes),
             csv_bytes(r.state_bytes),
             csv_bytes(r.params_bytes),
@@ -880,6 +928,8 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             String::new(),
             csv_num(a.map(KernelLine::instructions)),
             csv_num(b.map(KernelLine::instructions)),
+            csv_num(a.and_then(|l| l.cycles)),
+            csv_num(b.and_then(|l| l.cycles)),
             csv_bytes(code),
             csv_bytes(any.and_then(|l| l.state_bytes)),
             csv_bytes(any.and_then(|l| l.params_bytes)),
@@ -894,7 +944,8 @@ pub(super) fn svg(rows: &[Row]) -> String {
     let points: Vec<Point> = rows
         .iter()
         .filter_map(|r| {
-            let (e, c) = (r.error?, r.m4f?);
+            let cycles = ranked_by_cycles(rows.iter().filter(|q| q.key.family == r.key.family));
+            let (e, c) = (r.error?, rank_cost(r, cycles)?);
             (e.is_finite() && c > 0.0).then(|| Point {
                 family: r.key.family.clone(),
                 cost: c,
@@ -911,7 +962,7 @@ pub(super) fn svg(rows: &[Row]) -> String {
     }
     plot::render(
         "Error against cost: every scheme, order and number type (Pareto front per family)",
-        "Cortex-M4F guest instructions per call (QEMU, log)",
+        "Cortex-M4F estimated cycles per call (instructions where no mix was given; log)",
         &points,
         &fams,
     )
