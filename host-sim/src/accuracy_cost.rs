@@ -205,6 +205,9 @@ pub struct Row {
     pub m4f_cycles: Option<f64>,
     /// Cortex-M3 estimated cycles per call, net of the call.
     pub m3_cycles: Option<f64>,
+    /// The M4F input the cost is taken on (the worst of those measured),
+    /// one name per part.
+    pub m4f_input: Option<String>,
     /// Code bytes of the measured function (Cortex-M4F build).
     pub code_bytes: Option<u64>,
     /// State bytes.
@@ -231,6 +234,7 @@ impl Row {
             m3: None,
             m4f_cycles: None,
             m3_cycles: None,
+            m4f_input: None,
             code_bytes: None,
             state_bytes: None,
             params_bytes: None,
@@ -370,7 +374,7 @@ pub struct Report {
 }
 
 /// Columns of the CSV.
-pub const CSV_COLUMNS: [&str; 15] = [
+pub const CSV_COLUMNS: [&str; 16] = [
     "family",
     "name",
     "n",
@@ -383,6 +387,7 @@ pub const CSV_COLUMNS: [&str; 15] = [
     "m3_instr",
     "m4f_cycles",
     "m3_cycles",
+    "worst_input",
     "code_bytes",
     "state_bytes",
     "params_bytes",
@@ -395,17 +400,44 @@ struct Lines {
 }
 
 impl Lines {
+    /// Indexes `lines`; the lines of one kernel on several inputs become
+    /// one, the costliest (by estimated cycles when both have them, else
+    /// by instructions), with every input's cost in
+    /// [`KernelLine::by_input`].
     fn new(lines: Vec<KernelLine>) -> Result<Self, Error> {
-        let mut by = BTreeMap::new();
-        for l in lines {
-            let key = Key::new(&l.family, &l.name, l.n, &l.number);
-            let origin = l.origin.clone();
-            if let Some(old) = by.insert((l.target.clone(), key), l) {
+        let mut by: BTreeMap<(String, Key), KernelLine> = BTreeMap::new();
+        for mut l in lines {
+            let key = (
+                l.target.clone(),
+                Key::new(&l.family, &l.name, l.n, &l.number),
+            );
+            l.by_input = vec![l.input_cost()];
+            let Some(old) = by.get_mut(&key) else {
+                by.insert(key, l);
+                continue;
+            };
+            let repeated = l.input.is_none()
+                || old.input.is_none()
+                || old
+                    .by_input
+                    .iter()
+                    .any(|c| Some(&c.input) == l.input.as_ref());
+            if repeated {
                 return Err(Error::Duplicate {
-                    origin,
-                    previous: old.origin,
+                    origin: l.origin,
+                    previous: old.origin.clone(),
                 });
             }
+            let mut inputs = std::mem::take(&mut old.by_input);
+            inputs.push(l.input_cost());
+            let costlier = match (l.cycles, old.cycles) {
+                (Some(new), Some(was)) => new > was,
+                _ => l.instructions() > old.instructions(),
+            };
+            if costlier {
+                *old = l;
+            }
+            old.by_input = inputs;
         }
         Ok(Self {
             by,
@@ -451,6 +483,12 @@ fn join(
     row.m3 = sum_all(m3.iter().map(|l| l.as_ref().map(KernelLine::instructions)));
     row.m4f_cycles = sum_all(m4f.iter().map(|l| l.as_ref().and_then(|l| l.cycles)));
     row.m3_cycles = sum_all(m3.iter().map(|l| l.as_ref().and_then(|l| l.cycles)));
+    let mut inputs: Vec<&str> = m4f
+        .iter()
+        .filter_map(|l| l.as_ref()?.input.as_deref())
+        .collect();
+    inputs.dedup();
+    row.m4f_input = (!inputs.is_empty()).then(|| inputs.join("+"));
     let elf = elfs.get("m4f");
     row.code_bytes = sum_bytes(m4f.iter().map(|l| {
         let f = l.as_ref()?.function?;
@@ -583,7 +621,21 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
         callgrind: !instr.is_empty(),
         warnings: warnings.clone(),
     };
-    let markdown = report::markdown(&rows, &other, &goals, &footprints, &peers, &context);
+    let by_input: Vec<KernelLine> = lines
+        .by
+        .values()
+        .filter(|l| l.by_input.len() > 1)
+        .cloned()
+        .collect();
+    let markdown = report::markdown(
+        &rows,
+        &other,
+        &by_input,
+        &goals,
+        &footprints,
+        &peers,
+        &context,
+    );
     let csv = report::csv(&rows, &other, &elf_only);
     let svg = report::svg(&rows);
     Ok(Report {

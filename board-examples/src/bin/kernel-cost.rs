@@ -43,9 +43,9 @@ mod firmware {
     };
     use bushing_boards::probe::{self, INSTRUCTIONS_PER_TICK, Span, span as ticks};
     use bushing_kernels::{
-        DT, IwanOscillator, MountEffects, berg, bouc_wen, composite, dahl, default_bushing, drives,
-        engine_mount, grunwald, iwan_bank, iwan_oscillator, jenkins, maxwell_bank, mount_motion,
-        polynomial, sine, spline, sts16, xf2,
+        DT, IwanOscillator, MountEffects, band_noise, berg, bouc_wen, composite, dahl,
+        default_bushing, drives, engine_mount, grunwald, iwan_bank, iwan_oscillator, jenkins,
+        maxwell_bank, mount_motion, polynomial, sine, spline, sts16, xf2,
     };
     use cortex_m_rt::entry;
     use cortex_m_semihosting::hprintln;
@@ -55,6 +55,87 @@ mod firmware {
     /// Sine input: 2 mm amplitude, 100 samples per period (20 periods).
     const AMPLITUDE: f64 = 2.0;
     const PERIOD: usize = 100;
+    /// The small sine: below the smallest slip displacement of every Iwan
+    /// bank measured (0.02 mm), so that no cell slips and none is skipped.
+    const SMALL: f64 = 0.01;
+    /// Band-limited noise: 1 mm RMS, two poles at 2 % of the sample rate.
+    const NOISE_RMS: f64 = 1.0;
+    const NOISE_CORNER: f64 = 0.02;
+    const NOISE_SEED: u64 = 23;
+    /// The input of kernels that run on their own signal (trackers, the
+    /// oscillator, the 6-DOF mount, re-tuning).
+    const OWN: &str = "own";
+
+    /// The inputs every displacement-driven kernel is measured on; the
+    /// report keeps the worst and names it.
+    #[derive(Debug, Clone, Copy)]
+    enum Input {
+        /// The sine of the accuracy figures: 2 mm, 100 samples a period.
+        LargeSine,
+        /// The same sine at 0.01 mm.
+        SmallSine,
+        /// Band-limited noise, 1 mm RMS.
+        Noise,
+    }
+
+    impl Input {
+        const ALL: [Self; 3] = [Self::LargeSine, Self::SmallSine, Self::Noise];
+
+        fn name(self) -> &'static str {
+            match self {
+                Self::LargeSine => "sine-2mm",
+                Self::SmallSine => "sine-0.01mm",
+                Self::Noise => "noise-1mm",
+            }
+        }
+
+        fn xs<T: Real>(self) -> [T; STEPS] {
+            match self {
+                Self::LargeSine => sine::<T, STEPS>(AMPLITUDE, PERIOD),
+                Self::SmallSine => sine::<T, STEPS>(SMALL, PERIOD),
+                Self::Noise => band_noise::<T, STEPS>(NOISE_RMS, NOISE_CORNER, NOISE_SEED),
+            }
+        }
+    }
+
+    /// What the measurements on one input share: the displacements, the
+    /// drives the polynomial backbone gives for them, and the harness
+    /// baselines over each.
+    struct Run<'a, T> {
+        input: &'static str,
+        xs: &'a [T],
+        drives: &'a [Drive<T>],
+        /// The loop over `drives` alone.
+        baseline: Span,
+        /// The loop over `xs` alone.
+        xs_baseline: Span,
+    }
+
+    /// Measures `each` on every input, in number type `T`.
+    fn on_every_input<T: Real>(mut each: impl FnMut(&Run<'_, T>)) {
+        let Ok(poly) = polynomial::<T>() else { fail() };
+        for input in Input::ALL {
+            let xs = input.xs::<T>();
+            let ds = drives(&poly, &xs);
+            let baseline = ticks(|| {
+                for d in &ds {
+                    black_box(black_box(d));
+                }
+            });
+            let xs_baseline = ticks(|| {
+                for x in &xs {
+                    black_box(*black_box(x));
+                }
+            });
+            each(&Run {
+                input: input.name(),
+                xs: &xs,
+                drives: &ds,
+                baseline,
+                xs_baseline,
+            });
+        }
+    }
 
     const TARGET: &str = if cfg!(target_abi = "eabihf") {
         "m4f"
@@ -66,6 +147,8 @@ mod firmware {
     struct Line<'a> {
         /// Number type as the report names it (`f32`, `f64`, `fixed`).
         number: &'a str,
+        /// The input's name ([`Input`], or [`OWN`]).
+        input: &'a str,
         family: &'a str,
         name: &'a str,
         n: usize,
@@ -85,12 +168,13 @@ mod firmware {
         let net = tenths(t.ticks.saturating_sub(empty.ticks));
         let window = |s: Span| s.window.map_or(-1, |w| w as i64);
         hprintln!(
-            "kernel target={} type={} family={} name={} n={} per_call={}.{} net={}.{} state_bytes={} params_bytes={} fn={:#010x} calls={} windows={},{},{}",
+            "kernel target={} type={} family={} name={} n={} input={} per_call={}.{} net={}.{} state_bytes={} params_bytes={} fn={:#010x} calls={} windows={},{},{}",
             TARGET,
             line.number,
             line.family,
             line.name,
             line.n,
+            line.input,
             gross / 10,
             gross % 10,
             net / 10,
@@ -155,14 +239,15 @@ mod firmware {
     fn effect_cost<T: Real, E: Effect<T>, R, S>(
         (family, name, n): (&str, &str, usize),
         e: &E,
-        (drives, baseline): (&[Drive<T>], Span),
+        run: &Run<'_, T>,
         kernel: fn(&E, &mut E::State, &Drive<T>) -> R,
         empty: fn(&E, &mut E::State, &Drive<T>) -> S,
     ) {
-        let t = over_drives(e, drives, kernel);
-        let empty = over_drives(e, drives, empty);
+        let t = over_drives(e, run.drives, kernel);
+        let empty = over_drives(e, run.drives, empty);
         let line = Line {
             number: number_name::<T>(),
+            input: run.input,
             family,
             name,
             n,
@@ -170,30 +255,24 @@ mod firmware {
             params_bytes: size_of_val(e),
             function: kernel as usize,
         };
-        report(&line, t, empty, baseline, drives.len());
+        report(&line, t, empty, run.baseline, run.drives.len());
     }
 
     /// Cost of one `Effect::step_force` of `e` over `drives` (the state
     /// advanced, the force returned; no energy, no tangent).
-    fn force_only<T: Real, E: Effect<T>>(
-        label: (&str, &str, usize),
-        e: &E,
-        drives: &[Drive<T>],
-        baseline: Span,
-    ) {
+    fn force_only<T: Real, E: Effect<T>>(label: (&str, &str, usize), e: &E, run: &Run<'_, T>) {
         let kernel = effect_force::<T, E>;
-        effect_cost(label, e, (drives, baseline), kernel, force_empty::<T, E>);
+        effect_cost(label, e, run, kernel, force_empty::<T, E>);
     }
 
     /// Cost of one `Effect::step` of `e` over `drives`.
     fn effect<T: Real, E: Effect<T, Report = EffectOutput<T>>>(
         label: (&str, &str, usize),
         e: &E,
-        drives: &[Drive<T>],
-        baseline: Span,
+        run: &Run<'_, T>,
     ) {
         let kernel = effect_step::<T, E>;
-        effect_cost(label, e, (drives, baseline), kernel, effect_empty::<T, E>);
+        effect_cost(label, e, run, kernel, effect_empty::<T, E>);
     }
 
     /// One `Bushing::step`, returning what a rig loop reads: force,
@@ -223,9 +302,9 @@ mod firmware {
     fn whole<T: Real, B: Backbone<T>, E: Effect<T>>(
         (family, name, n): (&str, &str, usize),
         b: &Bushing<T, B, E>,
-        xs: &[T],
-        baseline: Span,
+        input: &Run<'_, T>,
     ) {
+        let xs = input.xs;
         type Kernel<T, B, E> =
             fn(&Bushing<T, B, E>, &mut BushingState<T, <E as Effect<T>>::State>, T) -> [T; 3];
         let run = |kernel: Kernel<T, B, E>| {
@@ -241,6 +320,7 @@ mod firmware {
         let f: Kernel<T, B, E> = bushing_step::<T, B, E>;
         let line = Line {
             number: number_name::<T>(),
+            input: input.input,
             family,
             name,
             n,
@@ -248,7 +328,7 @@ mod firmware {
             params_bytes: size_of_val(b),
             function: f as usize,
         };
-        report(&line, t, empty, baseline, xs.len());
+        report(&line, t, empty, input.xs_baseline, xs.len());
     }
 
     /// The number type as the report names it: Q16 (I16F16) is `fixed`.
@@ -260,11 +340,7 @@ mod firmware {
     }
 
     /// Every Maxwell form with `N` cells and storage `A` (named `storage`).
-    fn maxwell<T: Real, const N: usize, A: Accumulator<T>>(
-        storage: &str,
-        drives: &[Drive<T>],
-        baseline: Span,
-    ) {
+    fn maxwell<T: Real, const N: usize, A: Accumulator<T>>(storage: &str, run: &Run<'_, T>) {
         for form in MaxwellForm::ALL {
             let Ok(bank) = maxwell_bank::<T, N, A>(form) else {
                 fail()
@@ -273,75 +349,59 @@ mod firmware {
             name.push(form.name());
             name.push("/");
             name.push(storage);
-            effect(("maxwell", name.as_str(), N), &bank, drives, baseline);
-            force_only(("maxwell-force", name.as_str(), N), &bank, drives, baseline);
+            effect(("maxwell", name.as_str(), N), &bank, run);
+            force_only(("maxwell-force", name.as_str(), N), &bank, run);
         }
     }
 
     /// Maxwell banks of 1 to 16 cells in every storage.
-    fn maxwell_orders<T: Real>(drives: &[Drive<T>], baseline: Span) {
-        maxwell::<T, 1, Plain<T>>("plain", drives, baseline);
-        maxwell::<T, 2, Plain<T>>("plain", drives, baseline);
-        maxwell::<T, 4, Plain<T>>("plain", drives, baseline);
-        maxwell::<T, 8, Plain<T>>("plain", drives, baseline);
-        maxwell::<T, 16, Plain<T>>("plain", drives, baseline);
-        maxwell::<T, 1, Multiplied<T>>("multiplied", drives, baseline);
-        maxwell::<T, 2, Multiplied<T>>("multiplied", drives, baseline);
-        maxwell::<T, 4, Multiplied<T>>("multiplied", drives, baseline);
-        maxwell::<T, 8, Multiplied<T>>("multiplied", drives, baseline);
-        maxwell::<T, 16, Multiplied<T>>("multiplied", drives, baseline);
-        maxwell::<T, 1, Compensated<T>>("compensated", drives, baseline);
-        maxwell::<T, 2, Compensated<T>>("compensated", drives, baseline);
-        maxwell::<T, 4, Compensated<T>>("compensated", drives, baseline);
-        maxwell::<T, 8, Compensated<T>>("compensated", drives, baseline);
-        maxwell::<T, 16, Compensated<T>>("compensated", drives, baseline);
+    fn maxwell_orders<T: Real>(run: &Run<'_, T>) {
+        maxwell::<T, 1, Plain<T>>("plain", run);
+        maxwell::<T, 2, Plain<T>>("plain", run);
+        maxwell::<T, 4, Plain<T>>("plain", run);
+        maxwell::<T, 8, Plain<T>>("plain", run);
+        maxwell::<T, 16, Plain<T>>("plain", run);
+        maxwell::<T, 1, Multiplied<T>>("multiplied", run);
+        maxwell::<T, 2, Multiplied<T>>("multiplied", run);
+        maxwell::<T, 4, Multiplied<T>>("multiplied", run);
+        maxwell::<T, 8, Multiplied<T>>("multiplied", run);
+        maxwell::<T, 16, Multiplied<T>>("multiplied", run);
+        maxwell::<T, 1, Compensated<T>>("compensated", run);
+        maxwell::<T, 2, Compensated<T>>("compensated", run);
+        maxwell::<T, 4, Compensated<T>>("compensated", run);
+        maxwell::<T, 8, Compensated<T>>("compensated", run);
+        maxwell::<T, 16, Compensated<T>>("compensated", run);
     }
 
-    fn iwan<T: Real, const N: usize>(drives: &[Drive<T>], baseline: Span) {
+    fn iwan<T: Real, const N: usize>(run: &Run<'_, T>) {
         let Ok(bank) = iwan_bank::<T, N>() else {
             fail()
         };
-        effect(("iwan", "clamp/log", N), &bank, drives, baseline);
+        effect(("iwan", "clamp/log", N), &bank, run);
     }
 
     /// Iwan banks of 1 to 64 cells.
-    fn iwan_orders<T: Real>(drives: &[Drive<T>], baseline: Span) {
-        iwan::<T, 1>(drives, baseline);
-        iwan::<T, 2>(drives, baseline);
-        iwan::<T, 4>(drives, baseline);
-        iwan::<T, 8>(drives, baseline);
-        iwan::<T, 16>(drives, baseline);
-        iwan::<T, 32>(drives, baseline);
-        iwan::<T, 64>(drives, baseline);
+    fn iwan_orders<T: Real>(run: &Run<'_, T>) {
+        iwan::<T, 1>(run);
+        iwan::<T, 2>(run);
+        iwan::<T, 4>(run);
+        iwan::<T, 8>(run);
+        iwan::<T, 16>(run);
+        iwan::<T, 32>(run);
+        iwan::<T, 64>(run);
     }
 
     /// The kernels measured in every number type: Maxwell, Iwan and the
     /// default bushing, over the same sine.
     fn in_type<T: Real>() {
-        let xs = sine::<T, STEPS>(AMPLITUDE, PERIOD);
-        let Ok(poly) = polynomial::<T>() else { fail() };
-        let ds = drives(&poly, &xs);
-        let baseline = ticks(|| {
-            for d in &ds {
-                black_box(black_box(d));
-            }
-        });
-        let xs_baseline = ticks(|| {
-            for x in &xs {
-                black_box(*black_box(x));
-            }
-        });
-        maxwell_orders(&ds, baseline);
-        iwan_orders(&ds, baseline);
         let Ok(b) = default_bushing::<T>() else {
             fail()
         };
-        whole(
-            ("bushing", "default/spline+4maxwell+3jenkins", 7),
-            &b,
-            &xs,
-            xs_baseline,
-        );
+        on_every_input::<T>(|run| {
+            maxwell_orders(run);
+            iwan_orders(run);
+            whole(("bushing", "default/spline+4maxwell+3jenkins", 7), &b, run);
+        });
     }
 
     type Mount = bushing_kernels::Mount<f32>;
@@ -394,6 +454,7 @@ mod firmware {
             let [n1, n2] = &motion[0];
             let line = Line {
                 number: "f32",
+                input: OWN,
                 family: "six-dof",
                 name,
                 n: 6,
@@ -405,9 +466,9 @@ mod firmware {
         }
     }
 
-    fn grunwald_cost<const N: usize>(xs: &[f32], baseline: Span) {
+    fn grunwald_cost<const N: usize>(run: &Run<'_, f32>) {
         let Ok(b) = grunwald::<N>() else { fail() };
-        whole(("grunwald", "bushing/alpha-0.5", N), &b, xs, baseline);
+        whole(("grunwald", "bushing/alpha-0.5", N), &b, run);
     }
 
     type TrackerState<const N: usize> = bushing::tracker::ModalState<f32, N>;
@@ -484,6 +545,7 @@ mod firmware {
         let f: TrackerStep<N> = tracker_step::<N>;
         let line = Line {
             number: "f32",
+            input: OWN,
             family: "tracker",
             name,
             n: N,
@@ -519,6 +581,7 @@ mod firmware {
         });
         let line = Line {
             number: "f32",
+            input: OWN,
             family: "oscillator",
             name: "iwan-20/newmark",
             n: 20,
@@ -591,6 +654,7 @@ mod firmware {
         });
         let line = Line {
             number: "f32",
+            input: OWN,
             family: "sine-tracker",
             name: "sine/2-states",
             n: 2,
@@ -605,6 +669,7 @@ mod firmware {
         });
         let line = Line {
             number: "f32",
+            input: OWN,
             family: "sine-tracker",
             name: "modulus/x-and-f",
             n: 4,
@@ -677,6 +742,7 @@ mod firmware {
         let empty = run(call_empty::<S>);
         let line = Line {
             number: "f32",
+            input: OWN,
             family,
             name,
             n,
@@ -746,6 +812,7 @@ mod firmware {
         });
         let line = Line {
             number: "f64",
+            input: OWN,
             family: "tracker",
             name: "first-period-fit/50-samples",
             n: 50,
@@ -785,37 +852,8 @@ mod firmware {
         }
     }
 
-    #[entry]
-    fn main() -> ! {
-        probe::start();
-
-        let xs = sine::<f32, STEPS>(AMPLITUDE, PERIOD);
-        let Ok(poly) = polynomial::<f32>() else {
-            fail()
-        };
-        let ds = drives(&poly, &xs);
-        let baseline = ticks(|| {
-            for d in &ds {
-                black_box(black_box(d));
-            }
-        });
-        let xs_baseline = ticks(|| {
-            for x in &xs {
-                black_box(*black_box(x));
-            }
-        });
-        hprintln!(
-            "# kernel cost, {} calls each, sine {} mm over {} samples, dt = {} s",
-            STEPS,
-            AMPLITUDE,
-            PERIOD,
-            DT
-        );
-
-        in_type::<f32>();
-        in_type::<f64>();
-        in_type::<Q16>();
-
+    /// The f32 kernels beyond those of [`in_type`], on one input.
+    fn f32_kernels(run: &Run<'_, f32>) {
         for form in XfForm::ALL {
             let Ok(bank) = XfBank::<f32, 1>::new(form, &[XfSpec::hz(5.0, 0.1, 0.02)], DT) else {
                 fail()
@@ -824,54 +862,74 @@ mod firmware {
                 XfForm::Midpoint => "midpoint",
                 XfForm::ExactRamp => "exact-ramp",
             };
-            effect(("xf", name, 1), &bank, &ds, baseline);
+            effect(("xf", name, 1), &bank, run);
         }
 
+        let Ok(poly) = polynomial::<f32>() else {
+            fail()
+        };
         let Ok(b) = Bushing::new(poly, ()) else {
             fail()
         };
-        whole(("backbone", "polynomial-4", 1), &b, &xs, xs_baseline);
+        whole(("backbone", "polynomial-4", 1), &b, run);
         let Ok(spl) = spline::<f32>() else { fail() };
         let Ok(b) = Bushing::new(spl, ()) else { fail() };
-        whole(("backbone", "spline-8", 1), &b, &xs, xs_baseline);
+        whole(("backbone", "spline-8", 1), &b, run);
         let Ok(b) = sts16() else { fail() };
-        whole(("sts", "stack-16", 16), &b, &xs, xs_baseline);
+        whole(("sts", "stack-16", 16), &b, run);
 
-        grunwald_cost::<16>(&xs, xs_baseline);
-        grunwald_cost::<64>(&xs, xs_baseline);
-        grunwald_cost::<256>(&xs, xs_baseline);
-        grunwald_cost::<1024>(&xs, xs_baseline);
+        grunwald_cost::<16>(run);
+        grunwald_cost::<64>(run);
+        grunwald_cost::<256>(run);
+        grunwald_cost::<1024>(run);
 
         // Friction and smooth hysteresis cells on the polynomial backbone.
         for (alpha, name) in [(1.0, "dahl/alpha-1"), (0.5, "dahl/alpha-0.5")] {
             let Ok(b) = dahl(alpha) else { fail() };
-            whole(("friction", name, 1), &b, &xs, xs_baseline);
+            whole(("friction", name, 1), &b, run);
         }
         for (n, name) in [(2.0, "bouc-wen/n-2"), (8.0, "bouc-wen/n-8")] {
             let Ok(b) = bouc_wen(n) else { fail() };
-            whole(("friction", name, 1), &b, &xs, xs_baseline);
+            whole(("friction", name, 1), &b, run);
         }
         let Ok(b) = berg() else { fail() };
-        whole(("friction", "berg", 1), &b, &xs, xs_baseline);
+        whole(("friction", "berg", 1), &b, run);
         let Ok(bank) = IwanSliders::<f32, 16>::new(&jenkins::<16>(), 150.0) else {
             fail()
         };
-        effect(("iwan", "slider/log", 16), &bank, &ds, baseline);
+        effect(("iwan", "slider/log", 16), &bank, run);
         for form in XfForm::ALL {
             let Ok(b) = xf2(form) else { fail() };
             let name = match form {
                 XfForm::Midpoint => "bushing/midpoint-2",
                 XfForm::ExactRamp => "bushing/exact-ramp-2",
             };
-            whole(("xf", name, 2), &b, &xs, xs_baseline);
+            whole(("xf", name, 2), &b, run);
         }
         let Ok(b) = composite() else { fail() };
-        whole(
-            ("bushing", "final/poly+3maxwell+3jenkins+1xf", 7),
-            &b,
-            &xs,
-            xs_baseline,
+        whole(("bushing", "final/poly+3maxwell+3jenkins+1xf", 7), &b, run);
+    }
+
+    #[entry]
+    fn main() -> ! {
+        probe::start();
+        hprintln!(
+            "# kernel cost, {} calls each, dt = {} s; inputs: sine {} mm and {} mm over {} samples, band-limited noise {} mm RMS (corner {} of the rate, seed {})",
+            STEPS,
+            DT,
+            AMPLITUDE,
+            SMALL,
+            PERIOD,
+            NOISE_RMS,
+            NOISE_CORNER,
+            NOISE_SEED
         );
+
+        in_type::<f32>();
+        in_type::<f64>();
+        in_type::<Q16>();
+        on_every_input::<f32>(f32_kernels);
+
         oscillator();
         six_dof();
         sine_trackers();

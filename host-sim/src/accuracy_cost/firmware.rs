@@ -105,6 +105,14 @@ pub struct KernelLine {
     pub name: String,
     /// `n=`: order (cells, taps, states).
     pub n: usize,
+    /// `input=`: the input the kernel ran on (`sine-2mm`, `sine-0.01mm`,
+    /// `noise-1mm`, or `own` for a kernel on its own signal). Lines of
+    /// the same kernel on several inputs are merged into the costliest,
+    /// which keeps this name.
+    pub input: Option<String>,
+    /// Every input the kernel was measured on, with its instructions and
+    /// estimated cycles per call (filled when lines are merged).
+    pub by_input: Vec<InputCost>,
     /// `per_call=`: guest instructions per call, call included.
     pub per_call: f64,
     /// `net=`: the same without the call (what the kernel costs inlined),
@@ -133,7 +141,27 @@ pub struct KernelLine {
     pub origin: String,
 }
 
+/// A kernel's cost on one input.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputCost {
+    /// The input's name.
+    pub input: String,
+    /// Instructions per call, net of the call.
+    pub instructions: f64,
+    /// Estimated cycles per call, net of the call.
+    pub cycles: Option<f64>,
+}
+
 impl KernelLine {
+    /// This line's cost as an [`InputCost`] (unnamed input: `-`).
+    pub fn input_cost(&self) -> InputCost {
+        InputCost {
+            input: self.input.clone().unwrap_or_else(|| "-".into()),
+            instructions: self.instructions(),
+            cycles: self.cycles,
+        }
+    }
+
     /// Instructions per call as the report counts them: `net` when the
     /// firmware printed it, else `per_call`.
     pub fn instructions(&self) -> f64 {
@@ -273,6 +301,8 @@ fn kernel_line(rest: &str, origin: String) -> Result<KernelLine, LineProblem> {
         family: required(&f, "family")?.to_string(),
         name: required(&f, "name")?.to_string(),
         n,
+        input: f.get("input").cloned(),
+        by_input: Vec::new(),
         per_call: number(required(&f, "per_call")?, "per_call")?,
         net: optional_number(&f, "net")?,
         state_bytes: optional_integer(&f, "state_bytes")?,

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write;
 
 use super::families::THRESHOLD;
-use super::firmware::{Elf, KernelLine, PeerLine};
+use super::firmware::{Elf, InputCost, KernelLine, PeerLine};
 use super::plot::{self, Point};
 use super::{CSV_COLUMNS, Footprint, Goal, Key, Lines, Options, Row, rank_cost, ranked_by_cycles};
 use crate::markdown::{Table, cell};
@@ -72,10 +72,16 @@ fn m4f<'a>(lines: &'a mut Lines, family: &str, name: &str, n: usize) -> Option<&
     lines.get("m4f", &Key::new(family, name, n, "f32"))
 }
 
-/// The estimated cycles of a target's line, for its note.
+/// The estimated cycles and the worst input of a target's line, for its
+/// note.
 fn cycles_note(l: &KernelLine) -> String {
-    l.cycles
-        .map_or_else(String::new, |c| format!("; estimated {} cycles", sig(c)))
+    let cycles = l
+        .cycles
+        .map_or_else(String::new, |c| format!("; estimated {} cycles", sig(c)));
+    match &l.input {
+        Some(input) if l.by_input.len() > 1 => format!("{cycles}; worst input {input}"),
+        _ => cycles,
+    }
 }
 
 /// A per-cell target from a bank line.
@@ -251,7 +257,7 @@ pub(super) fn goals(lines: &mut Lines, peers: &[PeerLine]) -> Vec<Goal> {
         ),
         per_cell(
             lines,
-            "clamp Iwan cell, bank of 16 under a sine, per cell",
+            "clamp Iwan cell, bank of 16, per cell",
             12.0,
             ("iwan", "clamp/log", 16),
         ),
@@ -451,6 +457,7 @@ fn row_table(rows: &[&Row], with_family: bool) -> String {
         "M3 instr",
         "M4F cycles",
         "M3 cycles",
+        "worst input",
         "host ns",
         "host instr",
         "code B",
@@ -473,6 +480,7 @@ fn row_table(rows: &[&Row], with_family: bool) -> String {
             num(r.m3, 1),
             num(r.m4f_cycles, 1),
             num(r.m3_cycles, 1),
+            r.m4f_input.clone().unwrap_or_else(|| "-".into()),
             num(r.host_ns, 1),
             num(r.host_instr, 1),
             bytes(r.code_bytes),
@@ -551,6 +559,7 @@ fn maxwell_pivot(s: &mut String, rows: &[Row], number: &str) {
 pub(super) fn markdown(
     rows: &[Row],
     other: &[KernelLine],
+    by_input: &[KernelLine],
     goals: &[Goal],
     footprints: &[Footprint],
     peers: &[PeerLine],
@@ -749,6 +758,8 @@ pub(super) fn markdown(
         s.push_str(&table.finish());
     }
 
+    input_table(&mut s, by_input);
+
     let _ = writeln!(
         s,
         "\n## Other kernels\n\nFirmware lines no configuration above asks for (new families or names show up here).\n"
@@ -766,6 +777,7 @@ pub(super) fn markdown(
             "M3 instr",
             "M4F cycles",
             "M3 cycles",
+            "worst input",
             "M4F with the call",
             "state B",
             "params B",
@@ -787,6 +799,8 @@ pub(super) fn markdown(
                 b.map_or_else(|| "-".into(), |l| sig(l.instructions())),
                 a.and_then(|l| l.cycles).map_or_else(|| "-".into(), sig),
                 b.and_then(|l| l.cycles).map_or_else(|| "-".into(), sig),
+                a.and_then(|l| l.input.clone())
+                    .unwrap_or_else(|| "-".into()),
                 a.map_or_else(|| "-".into(), |l| sig(l.per_call)),
                 bytes(any.and_then(|l| l.state_bytes)),
                 bytes(any.and_then(|l| l.params_bytes)),
@@ -858,6 +872,65 @@ pub(super) fn markdown(
     s
 }
 
+/// The section of every kernel's cost on each of its inputs.
+fn input_table(s: &mut String, lines: &[KernelLine]) {
+    let _ = writeln!(
+        s,
+        "\n## Cost by input\n\n\
+         Every kernel driven by a displacement runs on three inputs: the sine of the accuracy \
+         figures (2 mm, 100 samples a period), the same sine at 0.01 mm (below the smallest slip \
+         displacement of every Iwan bank, so that no held cell is skipped) and band-limited noise \
+         (1 mm RMS, two poles at 2 % of the sample rate, seeded). Every table above takes a \
+         kernel's worst input (by estimated M4F cycles) and names it. Kernels on their own signal \
+         (trackers, oscillator, 6-DOF mount, re-tuning) have one input, `own`. Cortex-M4F, f32, \
+         estimated cycles (instructions) per call, net of the call:\n"
+    );
+    let mut names: Vec<String> = Vec::new();
+    for l in lines {
+        for c in &l.by_input {
+            if !names.contains(&c.input) {
+                names.push(c.input.clone());
+            }
+        }
+    }
+    let mine: Vec<&KernelLine> = lines
+        .iter()
+        .filter(|l| l.target == "m4f" && l.number == "f32" && l.by_input.len() > 1)
+        .collect();
+    if mine.is_empty() {
+        let _ = writeln!(s, "No kernel was measured on more than one input.");
+        return;
+    }
+    let mut table = Table::new(
+        ["kernel", "n"]
+            .into_iter()
+            .map(String::from)
+            .chain(names.iter().cloned())
+            .chain(["worst".to_string(), "worst / first".to_string()]),
+    );
+    for l in mine {
+        let cost = |c: &InputCost| c.cycles.unwrap_or(c.instructions);
+        let first = l.by_input.first().map(cost);
+        let worst = l.by_input.iter().map(cost).fold(f64::NAN, f64::max);
+        let cells = names.iter().map(|n| {
+            l.by_input.iter().find(|c| &c.input == n).map_or_else(
+                || "-".into(),
+                |c| cycles_instr(c.cycles, Some(c.instructions), 0),
+            )
+        });
+        table.row(
+            [format!("{}: {}", l.family, l.name), l.n.to_string()]
+                .into_iter()
+                .chain(cells)
+                .chain([
+                    l.input.clone().unwrap_or_else(|| "-".into()),
+                    first.map_or_else(|| "-".into(), |f| format!("{:.2}", worst / f)),
+                ]),
+        );
+    }
+    s.push_str(&table.finish());
+}
+
 /// The other kernels by family, name, n and type: (M4F line, M3 line);
 /// a line of another target counts as the M4F one when there is none.
 type Grouped<'a> = BTreeMap<Key, (Option<&'a KernelLine>, Option<&'a KernelLine>)>;
@@ -902,6 +975,7 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             csv_num(r.m3),
             csv_num(r.m4f_cycles),
             csv_num(r.m3_cycles),
+            r.m4f_input.clone().unwrap_or_default(),
             csv_bytes(r.code_bytes),
             csv_bytes(r.state_bytes),
             csv_bytes(r.params_bytes),
@@ -930,6 +1004,7 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             csv_num(b.map(KernelLine::instructions)),
             csv_num(a.and_then(|l| l.cycles)),
             csv_num(b.and_then(|l| l.cycles)),
+            a.and_then(|l| l.input.clone()).unwrap_or_default(),
             csv_bytes(code),
             csv_bytes(any.and_then(|l| l.state_bytes)),
             csv_bytes(any.and_then(|l| l.params_bytes)),
