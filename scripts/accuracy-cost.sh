@@ -87,9 +87,18 @@ else
     echo "==> no kalman-peers binary yet: the peer table says so"
 fi
 
+# The full report checks the cycle model against llvm-mca (Debian's llvm
+# package) where it is installed.
+if [ ${#mode[@]} -eq 0 ] && command -v llvm-mca >/dev/null 2>&1; then
+    mca=(--llvm-mca "$(command -v llvm-mca)")
+else
+    mca=()
+    [ ${#mode[@]} -gt 0 ] || echo "==> no llvm-mca: the report's cross-check says it did not run"
+fi
+
 echo "==> bushing-sim accuracy-cost ${mode[*]:-} --out $out"
 args=(accuracy-cost ${mode[@]+"${mode[@]}"} --kernels "${kernels[@]}" --elf "${elfs[@]}"
-    --mix "${mixes[@]}" --disassembly "${disassemblies[@]}")
+    --mix "${mixes[@]}" --disassembly "${disassemblies[@]}" ${mca[@]+"${mca[@]}"})
 if [ ${#peers[@]} -gt 0 ]; then
     args+=(--peers "${peers[@]}")
 fi

@@ -27,6 +27,7 @@ pub mod cycles;
 pub mod families;
 pub mod firmware;
 pub mod host;
+pub mod mca;
 pub mod plot;
 mod report;
 
@@ -292,6 +293,9 @@ pub struct Inputs {
     pub peers: Vec<(String, String)>,
     /// The executed-instruction mixes of the `kernel-cost` runs.
     pub mixes: Vec<MixInput>,
+    /// `llvm-mca`, for the cross-check of the cycle model ([`mca`]); none:
+    /// not run.
+    pub llvm_mca: Option<PathBuf>,
 }
 
 /// One target's executed-instruction mix and the disassembly of the ELF
@@ -573,10 +577,15 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
     for (source, text) in &inputs.kernels {
         all.extend(firmware::parse_kernels(source, text)?);
     }
+    let mut m4f_mix = None;
     for m in &inputs.mixes {
         let mix = cycles::Mix::parse(&m.source, &m.mix)?;
         let dis = cycles::Disassembly::parse(&m.disassembly);
-        cycles::attach(&mut all, &firmware::target_of_triple(&m.triple), &mix, &dis)?;
+        let target = firmware::target_of_triple(&m.triple);
+        cycles::attach(&mut all, &target, &mix, &dis)?;
+        if target == "m4f" {
+            m4f_mix = Some((mix, dis));
+        }
     }
     let mut lines = Lines::new(all)?;
     let mut elfs = BTreeMap::new();
@@ -615,7 +624,15 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
         .collect();
     let goals = report::goals(&mut lines, &peers);
     let footprints = read_footprints(&elfs);
+    let mca = match (&inputs.llvm_mca, &m4f_mix) {
+        (Some(program), Some((mix, dis))) => {
+            let m4f: Vec<&KernelLine> = lines.by.values().filter(|l| l.target == "m4f").collect();
+            Some(mca::compare(program, &m4f, mix, dis))
+        }
+        _ => None,
+    };
     let context = report::Context {
+        mca,
         options: *options,
         inputs: inputs_summary(inputs),
         callgrind: !instr.is_empty(),
@@ -734,6 +751,8 @@ pub struct Command {
     /// `--disassembly TRIPLE=PATH...`: the disassembly of each ELF with a
     /// mix.
     pub disassembly: Vec<(String, PathBuf)>,
+    /// `--llvm-mca PROGRAM`: the cross-check of the cycle model.
+    pub llvm_mca: Option<PathBuf>,
     /// `--out DIR`: where `accuracy-cost.{md,csv,svg}` go.
     pub out: PathBuf,
 }
@@ -788,6 +807,7 @@ impl Command {
             elfs,
             peers: self.peers.iter().map(text).collect::<Result<_, _>>()?,
             mixes,
+            llvm_mca: self.llvm_mca.clone(),
         })
     }
 }

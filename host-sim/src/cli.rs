@@ -299,6 +299,9 @@ pub struct AccuracyCostArgs {
     /// TRIPLE=PATH.
     #[arg(long, num_args = 1.., value_name = "TRIPLE=PATH", value_parser = elf_argument)]
     disassembly: Vec<(String, PathBuf)>,
+    /// `llvm-mca`, for the cross-check of the cycle model on a few kernels.
+    #[arg(long, value_name = "PROGRAM")]
+    llvm_mca: Option<PathBuf>,
     /// Where accuracy-cost.{md,csv,svg} go.
     #[arg(long)]
     out: PathBuf,
@@ -474,6 +477,7 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
                 peers: a.peers,
                 mix: a.mix,
                 disassembly: a.disassembly,
+                llvm_mca: a.llvm_mca,
                 out: a.out,
             };
             let text = accuracy_cost::run(&command).map_err(|e| CliError::Failed(e.to_string()))?;

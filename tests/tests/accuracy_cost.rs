@@ -86,6 +86,7 @@ fn inputs() -> Inputs {
         ],
         elfs: Vec::new(),
         peers: vec![("peers.txt".into(), PEERS.into())],
+        llvm_mca: None,
     }
 }
 
@@ -282,6 +283,13 @@ fn estimated_cycles_come_from_the_instruction_mix() {
         report.rows.iter().filter(|r| r.key.family == "maxwell")
     ));
     assert!(report.markdown.contains("M4F cycles"));
+    // No llvm-mca given: the cross-check says it did not run.
+    assert!(
+        report
+            .markdown
+            .contains("## Cycle model against llvm-mca\n")
+    );
+    assert!(report.markdown.contains("Not run: no `--llvm-mca PROGRAM`"));
 }
 
 #[test]

@@ -461,10 +461,47 @@ fn decode(mnemonic: &str, operands: &str) -> Op {
     op
 }
 
+/// Cycles of one pass of `ops` on `core`: each instruction's cost, with
+/// the pipelined loads and the FPU stalls between neighbours (no branch
+/// refill).
+fn pass(core: Core, ops: &[&Op]) -> u64 {
+    let column = match core {
+        Core::M4 => 0,
+        Core::M3 => 1,
+    };
+    let mut once = 0u64;
+    let mut previous: Option<&Op> = None;
+    for op in ops {
+        let mut c = op.cycles[column];
+        if let Some(p) = previous {
+            let pipelined = p.kind == Kind::Load && matches!(op.kind, Kind::Load | Kind::Store);
+            if pipelined {
+                c = 1;
+            }
+            let reads_result = matches!(p.kind, Kind::FpArith | Kind::FpMac)
+                && (op.reads | if op.kind == Kind::FpMac { op.writes } else { 0 }) & p.writes != 0;
+            let accumulator = op.kind == Kind::FpMac && p.writes & op.writes != 0;
+            if reads_result || accumulator {
+                c += 1;
+            }
+        }
+        once += c;
+        previous = Some(op);
+    }
+    once
+}
+
+/// The block of `window` that ran the most instructions.
+pub fn hottest(window: &Window) -> Option<&BlockCount> {
+    window.blocks.iter().max_by_key(|b| b.insns * b.execs)
+}
+
 /// The firmware's instructions by address, decoded for timing.
 #[derive(Debug, Clone, Default)]
 pub struct Disassembly {
     ops: BTreeMap<u64, Op>,
+    /// Each instruction as printed (`vmla.f32\ts0, s2, s4`).
+    texts: BTreeMap<u64, String>,
 }
 
 impl Disassembly {
@@ -473,6 +510,7 @@ impl Disassembly {
     /// `<unknown>`) and other lines are skipped.
     pub fn parse(text: &str) -> Self {
         let mut ops = BTreeMap::new();
+        let mut texts = BTreeMap::new();
         for line in text.lines() {
             let Some((addr, rest)) = line.split_once(':') else {
                 continue;
@@ -490,8 +528,9 @@ impl Disassembly {
             }
             let operands = fields.next().unwrap_or("");
             ops.insert(addr, decode(mnemonic, operands));
+            texts.insert(addr, format!("{mnemonic}\t{operands}"));
         }
-        Self { ops }
+        Self { ops, texts }
     }
 
     /// Instructions known.
@@ -504,15 +543,18 @@ impl Disassembly {
         self.ops.is_empty()
     }
 
-    /// Cycles of one block on `core`, over its executions.
-    fn block(&self, core: Core, b: &BlockCount) -> Result<u64, Error> {
+    /// The addresses and decoded instructions of block `b`.
+    fn block_ops(&self, b: &BlockCount) -> Result<Vec<(u64, &Op)>, Error> {
         // The block's first `insns` instructions. QEMU 7.2 can report a
         // block's end two bytes late: at a page end its Thumb translator
         // reads the next halfword (to see whether the next instruction
         // crosses the page) into the last instruction's bytes.
         let in_range = self.ops.range(b.start..b.end);
         let starts_at = self.ops.contains_key(&b.start);
-        let ops: Vec<&Op> = in_range.take(b.insns as usize).map(|(_, op)| op).collect();
+        let ops: Vec<(u64, &Op)> = in_range
+            .take(b.insns as usize)
+            .map(|(a, op)| (*a, op))
+            .collect();
         if !starts_at || ops.len() as u64 != b.insns {
             return Err(Error::Block {
                 start: b.start,
@@ -521,30 +563,30 @@ impl Disassembly {
                 found: ops.len() as u64,
             });
         }
-        let column = match core {
-            Core::M4 => 0,
-            Core::M3 => 1,
-        };
-        let mut once = 0u64;
-        let mut previous: Option<&Op> = None;
-        for op in &ops {
-            let mut c = op.cycles[column];
-            if let Some(p) = previous {
-                let pipelined = p.kind == Kind::Load && matches!(op.kind, Kind::Load | Kind::Store);
-                if pipelined {
-                    c = 1;
-                }
-                let reads_result = matches!(p.kind, Kind::FpArith | Kind::FpMac)
-                    && (op.reads | if op.kind == Kind::FpMac { op.writes } else { 0 }) & p.writes
-                        != 0;
-                let accumulator = op.kind == Kind::FpMac && p.writes & op.writes != 0;
-                if reads_result || accumulator {
-                    c += 1;
-                }
-            }
-            once += c;
-            previous = Some(op);
+        Ok(ops)
+    }
+
+    /// The instructions of block `b` as printed, without its last one
+    /// when that is a branch, and the model's cycles for one pass of them
+    /// on `core` (for comparing with a straight-line model such as
+    /// llvm-mca's).
+    pub fn straight_line(&self, core: Core, b: &BlockCount) -> Result<(Vec<String>, u64), Error> {
+        let mut ops = self.block_ops(b)?;
+        if ops.last().is_some_and(|(_, op)| op.kind == Kind::Branch) {
+            ops.pop();
         }
+        let only: Vec<&Op> = ops.iter().map(|(_, op)| *op).collect();
+        let texts = ops
+            .iter()
+            .map(|(a, _)| self.texts.get(a).cloned().unwrap_or_default())
+            .collect();
+        Ok((texts, pass(core, &only)))
+    }
+
+    /// Cycles of one block on `core`, over its executions.
+    fn block(&self, core: Core, b: &BlockCount) -> Result<u64, Error> {
+        let ops: Vec<&Op> = self.block_ops(b)?.into_iter().map(|(_, op)| op).collect();
+        let once = pass(core, &ops);
         let last_is_branch = ops.last().is_some_and(|op| op.kind == Kind::Branch);
         let refills = if last_is_branch { b.taken } else { 0 };
         Ok(once * b.execs + refills * REFILL)

@@ -13,6 +13,8 @@ use crate::markdown::{Table, cell};
 
 /// How the report was made.
 pub(super) struct Context {
+    /// The cycle model against llvm-mca, when it ran.
+    pub mca: Option<Vec<super::mca::Check>>,
     pub options: Options,
     pub inputs: Vec<String>,
     pub callgrind: bool,
@@ -759,6 +761,7 @@ pub(super) fn markdown(
     }
 
     input_table(&mut s, by_input);
+    mca_table(&mut s, ctx.mca.as_deref());
 
     let _ = writeln!(
         s,
@@ -870,6 +873,53 @@ pub(super) fn markdown(
         }
     }
     s
+}
+
+/// The section of the cycle model against llvm-mca.
+fn mca_table(s: &mut String, checks: Option<&[super::mca::Check]>) {
+    let _ = writeln!(
+        s,
+        "\n## Cycle model against llvm-mca\n\n\
+         The hottest straight-line block of a few kernels (its final branch left out), timed by the \
+         report's model (one pass) and by `llvm-mca -mcpu=cortex-m4` (cycles per iteration over \
+         100). LLVM's Cortex-M4 model issues one instruction a cycle and charges only a result's \
+         latency to the instruction that reads it; the Technical Reference Manual's tables, which \
+         the model follows, also hold the pipeline 2 cycles for a single load or store, 3 for a \
+         multiply-accumulate and 14 for a divide. They agree on single-cycle code and part where \
+         loads and multiply-accumulates are many.\n"
+    );
+    let Some(checks) = checks else {
+        let _ = writeln!(
+            s,
+            "Not run: no `--llvm-mca PROGRAM` (the full report runs it when `llvm-mca` is installed)."
+        );
+        return;
+    };
+    let mut table = Table::new([
+        "kernel",
+        "block",
+        "instructions",
+        "share of the kernel's",
+        "model cycles",
+        "llvm-mca cycles",
+        "model / llvm-mca",
+    ]);
+    for c in checks {
+        let (mca, ratio) = match &c.mca {
+            Ok(m) => (format!("{m:.1}"), format!("{:.2}", c.model as f64 / m)),
+            Err(why) => (format!("failed: {}", cell(why)), "-".into()),
+        };
+        table.row([
+            c.kernel.clone(),
+            format!("{:#x}", c.start),
+            c.instructions.to_string(),
+            format!("{:.0} %", 100.0 * c.share),
+            c.model.to_string(),
+            mca,
+            ratio,
+        ]);
+    }
+    s.push_str(&table.finish());
 }
 
 /// The section of every kernel's cost on each of its inputs.
