@@ -23,10 +23,15 @@
 //! plain EKF/UKF as they do. And minikalman, kfilter and adskalman, each
 //! as an extended Kalman filter built by hand on top of the crate: the
 //! harness computes the nonlinear prediction of (a, b) and the Jacobian F
-//! with libm `expf`, `cosf` and `sinf`, as a plain user would, gives F and
-//! Q to the crate's covariance prediction `F P Fᵀ + Q`, then the
-//! measurement Jacobian H (1 x 4) and the nonlinear predicted measurement
-//! to the crate's update. Covariance updates: minikalman `P - K (H P)`
+//! with the f32 functions our tracker uses (`bushing::tracker::fast::
+//! exp_small` and `bushing::tracker::trig::sin_cos`, polynomials where
+//! libm's `expf`, `cosf` and `sinf` would run in software double
+//! precision on the Cortex-M4F), gives F and Q to the crate's covariance
+//! prediction `F P Fᵀ + Q`, then the measurement Jacobian H (1 x 4) and
+//! the nonlinear predicted measurement to the crate's update. The cost of
+//! those model functions alone (one prediction and one measurement a
+//! sample) is measured too and printed with each peer as `model=`, so
+//! that the report can show what the filter itself costs. Covariance updates: minikalman `P - K (H P)`
 //! (standard form, not symmetrised), kfilter `(I - K H) P` then its
 //! symmetric part, adskalman the Joseph form
 //! (`CovarianceUpdateMethod::JosephForm`, as ours).
@@ -52,6 +57,7 @@
 //!
 //! ```text
 //! kalman name=ours-ekf crate=bushing filter=ekf cost=... unit=ns freq_err_pct=... damp_err_pts=... amp_rms=...
+//! kalman name=minikalman crate=minikalman@0.8.1 filter=ekf cost=... unit=ns model=... freq_err_pct=... ...
 //! ```
 //!
 //! ```text
@@ -65,6 +71,8 @@ use core::fmt;
 use core::hint::black_box;
 
 use bushing::ParamError;
+use bushing::tracker::fast::exp_small;
+use bushing::tracker::trig::sin_cos;
 use bushing::tracker::{
     Filter, Measured, ModalState, ModalTracker, ModeInit, SensorSpec, Tuning, UtParams,
 };
@@ -210,11 +218,13 @@ fn sq(x: f64) -> f64 {
     x * x
 }
 
-/// The nonlinear prediction `x' = f(x)` and its Jacobian F, with libm.
+/// The nonlinear prediction `x' = f(x)` and its Jacobian F, with the f32
+/// exponential and sine-cosine of our tracker (θ in [0, π], |λ| small).
 fn predict(x: &Vector) -> (Vector, Matrix) {
     let [theta, lambda, a, b] = *x;
-    let e = libm::expf(lambda);
-    let (ec, es) = (e * libm::cosf(theta), e * libm::sinf(theta));
+    let e = exp_small(lambda);
+    let (sin, cos) = sin_cos(theta);
+    let (ec, es) = (e * cos, e * sin);
     let (a1, b1) = (ec * a - es * b, es * a + ec * b);
     let f = [
         [1.0, 0.0, 0.0, 0.0],
@@ -760,7 +770,33 @@ impl fmt::Display for Num {
     }
 }
 
-/// Measures one filter and prints its line.
+/// The peers' model functions alone: the state advanced by the
+/// prediction, the measurement taken at it, as in one EKF step.
+struct ModelOnly {
+    x: Vector,
+}
+
+/// One sample's model functions: `f(x)` with F, then `h(x)` with H.
+#[inline(never)]
+fn model_update(m: &mut ModelOnly, y: f32) {
+    let (x1, jac) = predict(&m.x);
+    let (zhat, h) = observe(&x1);
+    m.x = x1;
+    black_box((jac, zhat + y, h));
+}
+
+/// Cost of a peer's model functions per update, net of the loop.
+fn model_cost(p: &Problem, rec: &Record) -> f64 {
+    let make = || ModelOnly { x: p.x0 };
+    let busy = elapsed(&make, model_update, &rec.noisy);
+    let idle = elapsed(&make, empty_update::<ModelOnly>, &rec.noisy);
+    (busy - idle) / SAMPLES as f64
+}
+
+/// Measures one filter and prints its line; `model` is the cost of the
+/// harness's model functions inside its update (none for ours, whose
+/// model is its own).
+#[allow(clippy::too_many_arguments)]
 fn compare<F: Estimate>(
     name: &str,
     krate: &str,
@@ -769,22 +805,38 @@ fn compare<F: Estimate>(
     update: fn(&mut F, f32),
     rec: &Record,
     gain: f32,
+    model: Option<f64>,
 ) {
     let busy = elapsed(make, update, &rec.noisy);
     let idle = elapsed(make, empty_update::<F>, &rec.noisy);
     let cost = (busy - idle) / SAMPLES as f64;
     let e = errors(make(), update, rec, gain);
+    let model = model.map(|m| Num(m, 1));
     say!(
-        "kalman name={} crate={} filter={} cost={} unit={} freq_err_pct={} damp_err_pts={} amp_rms={}",
+        "kalman name={} crate={} filter={} cost={} unit={}{}{} freq_err_pct={} damp_err_pts={} amp_rms={}",
         name,
         krate,
         filter,
         Num(cost, 1),
         UNIT,
+        if model.is_some() { " model=" } else { "" },
+        Maybe(model),
         Num(e.freq_pct, 6),
         Num(e.damp_pts, 6),
         Num(e.amp_rms, 6)
     );
+}
+
+/// An optional number: nothing when absent.
+struct Maybe(Option<Num>);
+
+impl fmt::Display for Maybe {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.0 {
+            Some(n) => n.fmt(f),
+            None => Ok(()),
+        }
+    }
 }
 
 /// The whole comparison.
@@ -802,12 +854,13 @@ fn run() -> Result<(), ParamError> {
         XI_START
     );
     say!(
-        "# peers: EKF by hand, f(x) and F with libm expf/cosf/sinf; updates: minikalman P - K H P, kfilter (I - K H) P symmetrised, adskalman Joseph; ours Joseph"
+        "# peers: EKF by hand, f(x) and F with our tracker's f32 exp_small and sin_cos (model= their cost per update); updates: minikalman P - K H P, kfilter (I - K H) P symmetrised, adskalman Joseph; ours Joseph"
     );
     say!(
         "# ours: default Tuning (a mode below fade_snr = 3 noise deviations fades: amplitudes kept loose, here after ~2.8 s); -nofade: fade_snr = 0, the peers' plain EKF"
     );
     let g = p.gain;
+    let model = Some(model_cost(&p, &rec));
     compare(
         "ours-ekf",
         "bushing",
@@ -816,6 +869,7 @@ fn run() -> Result<(), ParamError> {
         ours_update,
         &rec,
         g,
+        None,
     );
     compare(
         "ours-ukf",
@@ -825,6 +879,7 @@ fn run() -> Result<(), ParamError> {
         ours_update,
         &rec,
         g,
+        None,
     );
     compare(
         "ours-ekf-nofade",
@@ -834,6 +889,7 @@ fn run() -> Result<(), ParamError> {
         ours_update,
         &rec,
         g,
+        None,
     );
     compare(
         "ours-ukf-nofade",
@@ -843,6 +899,7 @@ fn run() -> Result<(), ParamError> {
         ours_update,
         &rec,
         g,
+        None,
     );
     compare(
         "minikalman",
@@ -852,6 +909,7 @@ fn run() -> Result<(), ParamError> {
         mk::minikalman_update,
         &rec,
         g,
+        model,
     );
     compare(
         "kfilter",
@@ -861,6 +919,7 @@ fn run() -> Result<(), ParamError> {
         kf::kfilter_update,
         &rec,
         g,
+        model,
     );
     compare(
         "adskalman",
@@ -870,6 +929,7 @@ fn run() -> Result<(), ParamError> {
         ads::adskalman_update,
         &rec,
         g,
+        model,
     );
     Ok(())
 }

@@ -182,6 +182,9 @@ pub struct PeerLine {
     pub cost: f64,
     /// `unit=`: `instructions` or `ns`.
     pub unit: String,
+    /// `model=`: the cost of the harness's model functions (f(x), F,
+    /// h(x), H) inside a peer's update, in the same unit; none for ours.
+    pub model: Option<f64>,
     /// `freq_err_pct=`.
     pub freq_err_pct: Option<f64>,
     /// `damp_err_pts=`.
@@ -193,6 +196,12 @@ pub struct PeerLine {
 }
 
 impl PeerLine {
+    /// The filter's own cost: [`PeerLine::cost`] less the model functions
+    /// the harness gives it.
+    pub fn filter_only(&self) -> f64 {
+        self.cost - self.model.unwrap_or(0.0)
+    }
+
     /// True for our own tracker.
     pub fn is_ours(&self) -> bool {
         self.krate == "bushing" || self.krate.starts_with("bushing@")
@@ -362,6 +371,7 @@ fn peer_line(rest: &str, source: &str) -> Result<PeerLine, LineProblem> {
         filter: required(&f, "filter")?.to_string(),
         cost: number(required(&f, "cost")?, "cost")?,
         unit: required(&f, "unit")?.to_string(),
+        model: optional_number(&f, "model")?,
         freq_err_pct: error("freq_err_pct")?,
         damp_err_pts: error("damp_err_pts")?,
         amp_rms: error("amp_rms")?,
@@ -664,9 +674,10 @@ mod tests {
 
     #[test]
     fn peer_lines() {
-        let text = "kalman name=a crate=kalman-x@0.1 filter=ekf cost=900 unit=instructions freq_err_pct=0.02 damp_err_pts=-0.01 amp_rms=nan\n";
+        let text = "kalman name=a crate=kalman-x@0.1 filter=ekf cost=900 unit=instructions model=250 freq_err_pct=0.02 damp_err_pts=-0.01 amp_rms=nan\n";
         let p = parse_peers("p", text).unwrap();
         assert_eq!(p[0].damp_err_pts, Some(0.01));
+        assert_eq!((p[0].model, p[0].filter_only()), (Some(250.0), 650.0));
         assert_eq!(p[0].amp_rms, None);
         assert!(!p[0].is_ours());
         assert!(parse_peers("p", "kalman name=a crate=b filter=ekf unit=ns").is_err());

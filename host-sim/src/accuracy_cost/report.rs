@@ -196,14 +196,21 @@ fn third_rule(peers: &[PeerLine]) -> Vec<Goal> {
             (Some(o), _) => (
                 Some(o.cost / best.cost),
                 format!(
-                    "ours `{}` ({}) {} against `{}` ({} {}) {}, accuracy as good or better",
+                    "ours `{}` ({}) {} against `{}` ({} {}) {}, accuracy as good or better{}",
                     o.name,
                     o.filter,
                     sig(o.cost),
                     best.name,
                     best.krate,
                     best.filter,
-                    sig(best.cost)
+                    sig(best.cost),
+                    best.model.map_or_else(String::new, |m| format!(
+                        "; without the peer's model functions ({}): {} against {}, a ratio of {:.3}",
+                        sig(m),
+                        sig(o.cost),
+                        sig(best.filter_only()),
+                        o.cost / best.filter_only()
+                    ))
                 ),
             ),
             (None, Some(o)) => (
@@ -829,7 +836,11 @@ pub(super) fn markdown(
              {SAME_AMPLITUDE_RATIO} times. `ours-*` run the default tuning, which fades a mode whose \
              amplitude sinks below 3 noise deviations (frequency and damping frozen): this record \
              decays below that after about 2.8 s, hence their amplitude error; `ours-*-nofade` run \
-             the same plain filter as the peers.\n"
+             the same plain filter as the peers. The peers' model functions (the prediction f(x) \
+             with its Jacobian, the measurement h(x) with its gradient) are the harness's, built on \
+             our tracker's own f32 exponential and sine-cosine; **model functions** is their cost \
+             per update, **filter only** the peer's cost without it (ours computes its model \
+             inside its update).\n"
         );
         let mut table = Table::new([
             "source",
@@ -838,6 +849,8 @@ pub(super) fn markdown(
             "filter",
             "cost",
             "unit",
+            "model functions",
+            "filter only",
             "f0 error %",
             "damping error pts",
             "amplitude RMS",
@@ -850,6 +863,8 @@ pub(super) fn markdown(
                 p.filter.clone(),
                 sig(p.cost),
                 p.unit.clone(),
+                p.model.map_or_else(|| "(inside)".into(), sig),
+                p.model.map_or_else(|| "-".into(), |_| sig(p.filter_only())),
                 num(p.freq_err_pct, 6),
                 num(p.damp_err_pts, 6),
                 num(p.amp_rms, 6),
@@ -1104,6 +1119,7 @@ mod tests {
             filter: "ekf".into(),
             cost,
             unit: "instructions".into(),
+            model: None,
             freq_err_pct: Some(errors[0]),
             damp_err_pts: Some(errors[1]),
             amp_rms: Some(errors[2]),
