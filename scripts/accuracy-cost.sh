@@ -87,6 +87,27 @@ else
     echo "==> no kalman-peers binary yet: the peer table says so"
 fi
 
+# The full report compares the M4F build with the generic ARMv7E-M one (no
+# target-cpu, as the flags of .cargo/config.toml are chosen on estimated
+# cycles), measured the same way in a build folder of its own.
+other=()
+if [ ${#mode[@]} -eq 0 ]; then
+    echo "==> kernel-cost on thumbv7em-none-eabihf, target-cpu=generic (QEMU, with the plugin)"
+    generic="$work/generic-cpu"
+    mkdir -p "$generic"
+    RUSTFLAGS="-C target-cpu=generic" CARGO_TARGET_DIR="$generic/target" \
+        cargo build -q --release -p bushing-boards --target thumbv7em-none-eabihf --bin kernel-cost
+    cp "$generic/target/thumbv7em-none-eabihf/release/kernel-cost" "$generic/kernel-cost.elf"
+    rm -f "$generic/kernel-cost.txt" "$generic/mix.txt"
+    timeout -k 5 300 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
+        -semihosting-config enable=on,target=native -icount shift=0,sleep=off \
+        -plugin "$plugin,elf=$generic/kernel-cost.elf,out=$generic/mix.txt" \
+        -kernel "$generic/kernel-cost.elf" >"$generic/kernel-cost.txt"
+    "$objdump" -d --no-show-raw-insn "$generic/kernel-cost.elf" >"$generic/kernel-cost.dis"
+    other=(--other-build "target-cpu=generic" --other-kernels "$generic/kernel-cost.txt"
+        --other-mix "$generic/mix.txt" --other-disassembly "$generic/kernel-cost.dis")
+fi
+
 # The full report checks the cycle model against llvm-mca (Debian's llvm
 # package) where it is installed.
 if [ ${#mode[@]} -eq 0 ] && command -v llvm-mca >/dev/null 2>&1; then
@@ -98,7 +119,8 @@ fi
 
 echo "==> bushing-sim accuracy-cost ${mode[*]:-} --out $out"
 args=(accuracy-cost ${mode[@]+"${mode[@]}"} --kernels "${kernels[@]}" --elf "${elfs[@]}"
-    --mix "${mixes[@]}" --disassembly "${disassemblies[@]}" ${mca[@]+"${mca[@]}"})
+    --mix "${mixes[@]}" --disassembly "${disassemblies[@]}" ${mca[@]+"${mca[@]}"}
+    ${other[@]+"${other[@]}"})
 if [ ${#peers[@]} -gt 0 ]; then
     args+=(--peers "${peers[@]}")
 fi

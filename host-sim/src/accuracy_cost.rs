@@ -23,6 +23,7 @@
 //! The command's entry point is [`run`] with a [`Command`]; [`generate`]
 //! computes the report from inputs already in memory.
 
+pub mod builds;
 pub mod cycles;
 pub mod families;
 pub mod firmware;
@@ -296,6 +297,20 @@ pub struct Inputs {
     /// `llvm-mca`, for the cross-check of the cycle model ([`mca`]); none:
     /// not run.
     pub llvm_mca: Option<PathBuf>,
+    /// Another M4F build of the kernel-cost firmware (other flags), for
+    /// the "Build flags" comparison ([`builds`]).
+    pub other_build: Option<OtherBuild>,
+}
+
+/// Another build's kernel-cost output and instruction mix.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct OtherBuild {
+    /// What differs (its flags).
+    pub name: String,
+    /// `(source name, text)` of its `kernel-cost` output.
+    pub kernels: (String, String),
+    /// Its mix and disassembly (M4F).
+    pub mix: MixInput,
 }
 
 /// One target's executed-instruction mix and the disassembly of the ELF
@@ -342,6 +357,8 @@ pub struct Goal {
     pub limit: f64,
     /// The measured figure.
     pub measured: Option<f64>,
+    /// The same in estimated Cortex-M4 cycles, where the report has them.
+    pub cycles: Option<f64>,
     /// How it was measured.
     pub note: String,
 }
@@ -624,6 +641,22 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
         .collect();
     let goals = report::goals(&mut lines, &peers);
     let footprints = read_footprints(&elfs);
+    let builds = match &inputs.other_build {
+        Some(o) => {
+            let mut other = firmware::parse_kernels(&o.kernels.0, &o.kernels.1)?;
+            let mix = cycles::Mix::parse(&o.mix.source, &o.mix.mix)?;
+            let dis = cycles::Disassembly::parse(&o.mix.disassembly);
+            cycles::attach(
+                &mut other,
+                &firmware::target_of_triple(&o.mix.triple),
+                &mix,
+                &dis,
+            )?;
+            let other = Lines::new(other)?;
+            builds::compare(&o.name, lines.by.values(), other.by.values())
+        }
+        None => None,
+    };
     let mca = match (&inputs.llvm_mca, &m4f_mix) {
         (Some(program), Some((mix, dis))) => {
             let m4f: Vec<&KernelLine> = lines.by.values().filter(|l| l.target == "m4f").collect();
@@ -632,6 +665,7 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
         _ => None,
     };
     let context = report::Context {
+        builds,
         mca,
         options: *options,
         inputs: inputs_summary(inputs),
@@ -753,6 +787,9 @@ pub struct Command {
     pub disassembly: Vec<(String, PathBuf)>,
     /// `--llvm-mca PROGRAM`: the cross-check of the cycle model.
     pub llvm_mca: Option<PathBuf>,
+    /// `--other-build NAME --other-kernels FILE --other-mix FILE
+    /// --other-disassembly FILE`: another M4F build to compare with.
+    pub other_build: Option<(String, PathBuf, PathBuf, PathBuf)>,
     /// `--out DIR`: where `accuracy-cost.{md,csv,svg}` go.
     pub out: PathBuf,
 }
@@ -808,6 +845,19 @@ impl Command {
             peers: self.peers.iter().map(text).collect::<Result<_, _>>()?,
             mixes,
             llvm_mca: self.llvm_mca.clone(),
+            other_build: match &self.other_build {
+                Some((name, kernels, mix, dis)) => Some(OtherBuild {
+                    name: name.clone(),
+                    kernels: text(kernels)?,
+                    mix: MixInput {
+                        triple: "thumbv7em-none-eabihf".into(),
+                        source: mix.display().to_string(),
+                        mix: text(mix)?.1,
+                        disassembly: text(dis)?.1,
+                    },
+                }),
+                None => None,
+            },
         })
     }
 }

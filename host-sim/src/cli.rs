@@ -302,6 +302,19 @@ pub struct AccuracyCostArgs {
     /// `llvm-mca`, for the cross-check of the cycle model on a few kernels.
     #[arg(long, value_name = "PROGRAM")]
     llvm_mca: Option<PathBuf>,
+    /// Another M4F build to compare with (what differs, e.g. its flags);
+    /// needs the three --other-* files.
+    #[arg(long, value_name = "NAME", requires_all = ["other_kernels", "other_mix", "other_disassembly"])]
+    other_build: Option<String>,
+    /// The other build's kernel-cost output.
+    #[arg(long, value_name = "FILE", requires = "other_build")]
+    other_kernels: Option<PathBuf>,
+    /// The other build's instruction mix.
+    #[arg(long, value_name = "FILE", requires = "other_build")]
+    other_mix: Option<PathBuf>,
+    /// The other build's disassembly.
+    #[arg(long, value_name = "FILE", requires = "other_build")]
+    other_disassembly: Option<PathBuf>,
     /// Where accuracy-cost.{md,csv,svg} go.
     #[arg(long)]
     out: PathBuf,
@@ -478,6 +491,15 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
                 mix: a.mix,
                 disassembly: a.disassembly,
                 llvm_mca: a.llvm_mca,
+                other_build: match (
+                    a.other_build,
+                    a.other_kernels,
+                    a.other_mix,
+                    a.other_disassembly,
+                ) {
+                    (Some(n), Some(k), Some(m), Some(d)) => Some((n, k, m, d)),
+                    _ => None,
+                },
                 out: a.out,
             };
             let text = accuracy_cost::run(&command).map_err(|e| CliError::Failed(e.to_string()))?;

@@ -87,6 +87,7 @@ fn inputs() -> Inputs {
         elfs: Vec::new(),
         peers: vec![("peers.txt".into(), PEERS.into())],
         llvm_mca: None,
+        other_build: None,
     }
 }
 
@@ -327,6 +328,34 @@ fn a_kernel_on_several_inputs_is_costed_on_its_worst() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("again.txt:1"), "{e}");
+}
+
+#[test]
+fn another_build_is_compared_on_estimated_cycles() {
+    let mut i = inputs();
+    // The other build: the same instructions but plain adds for the
+    // multiply-accumulates (2 cycles less each, and no stall).
+    i.other_build = Some(accuracy_cost::OtherBuild {
+        name: "adds".into(),
+        kernels: ("other.txt".into(), KERNELS_M4F.into()),
+        mix: accuracy_cost::MixInput {
+            triple: "thumbv7em-none-eabihf".into(),
+            source: "other-mix.txt".into(),
+            mix: MIX_M4F.into(),
+            disassembly: DISASSEMBLY_M4F.replace("vmla.f32", "vadd.f32"),
+        },
+    });
+    let report = accuracy_cost::generate(&i, &Options::quick()).expect("the generator runs");
+    let md = &report.markdown;
+    // Kernel window 128 against (2 + 1 + 1 + 1 + 1) x 10 + 18 = 78 in the
+    // other; stand-ins 40 in both: (128 - 40) / (78 - 40) = 2.316.
+    assert!(
+        md.contains("Against `adds`, over the 1 M4F f32 kernels")
+            && md.contains("cycles 2.316 times"),
+        "{}",
+        md.lines().find(|l| l.starts_with("Against")).unwrap_or("")
+    );
+    assert!(quick().markdown.contains("Not compared in this run"));
 }
 
 #[test]
