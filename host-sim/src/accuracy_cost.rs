@@ -128,6 +128,17 @@ pub(crate) fn refused(what: impl Into<String>) -> impl FnOnce(ParamError) -> Err
     }
 }
 
+/// The kernels the report singles out (M4F, f32): family, name, n. The
+/// build comparison and the llvm-mca cross-check table them.
+pub const HEADLINE: [(&str, &str, usize); 6] = [
+    ("maxwell-force", "rate-exact-ramp/plain", 8),
+    ("maxwell", "rate-exact-ramp/plain", 8),
+    ("iwan", "clamp/log", 16),
+    ("bushing", "default/spline+4maxwell+3jenkins", 7),
+    ("tracker", "ekf/1-mode-1-acc", 4),
+    ("six-dof", "mount/invariant", 6),
+];
+
 /// What identifies a kernel: the firmware's `family`, `name`, `n` and
 /// `type`.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]

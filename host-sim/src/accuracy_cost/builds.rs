@@ -7,16 +7,7 @@ use std::collections::BTreeMap;
 use super::Key;
 use super::firmware::KernelLine;
 
-/// The kernels named in the comparison's table (M4F, f32), beside the
-/// summary over every kernel.
-pub const NAMED: [(&str, &str, usize); 6] = [
-    ("maxwell-force", "rate-exact-ramp/plain", 8),
-    ("maxwell", "rate-exact-ramp/plain", 8),
-    ("iwan", "clamp/log", 16),
-    ("bushing", "default/spline+4maxwell+3jenkins", 7),
-    ("tracker", "ekf/1-mode-1-acc", 4),
-    ("six-dof", "mount/invariant", 6),
-];
+use super::HEADLINE;
 
 /// One kernel in both builds: (instructions, estimated cycles).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,7 +33,7 @@ pub struct Comparison {
     pub fewer_cycles: usize,
     /// Kernels with more.
     pub more_cycles: usize,
-    /// The [`NAMED`] kernels found in both.
+    /// The [`HEADLINE`] kernels found in both.
     pub named: Vec<(Key, Pair)>,
 }
 
@@ -82,7 +73,7 @@ pub fn compare<'a>(
         let logs: f64 = pairs.iter().map(|(_, p)| f(p).ln()).sum();
         (logs / pairs.len() as f64).exp()
     };
-    let named = NAMED
+    let named = HEADLINE
         .iter()
         .filter_map(|&(family, name, n)| {
             let key = Key::new(family, name, n, "f32");

@@ -13,17 +13,9 @@
 use std::path::Path;
 use std::process::Command;
 
+use super::HEADLINE;
 use super::cycles::{self, Core, Disassembly, Mix};
 use super::firmware::KernelLine;
-
-/// The kernels compared (M4F, f32): family, name, n.
-pub const KERNELS: [(&str, &str, usize); 5] = [
-    ("maxwell-force", "rate-exact-ramp/plain", 8),
-    ("maxwell", "rate-exact-ramp/plain", 8),
-    ("iwan", "clamp/log", 16),
-    ("bushing", "default/spline+4maxwell+3jenkins", 7),
-    ("tracker", "ekf/1-mode-1-acc", 4),
-];
 
 /// Iterations llvm-mca runs the block for (its figure is per iteration).
 const ITERATIONS: u32 = 100;
@@ -45,7 +37,7 @@ pub struct Check {
     pub mca: Result<f64, String>,
 }
 
-/// Compares the model with llvm-mca (the program at `mca`) on [`KERNELS`]
+/// Compares the model with llvm-mca (the program at `mca`) on [`HEADLINE`]
 /// of the M4F `lines`, whose windows are in `mix` over `disassembly`.
 pub fn compare(
     mca: &Path,
@@ -54,7 +46,7 @@ pub fn compare(
     disassembly: &Disassembly,
 ) -> Vec<Check> {
     let mut out = Vec::new();
-    for (family, name, n) in KERNELS {
+    for (family, name, n) in HEADLINE {
         let Some(line) = lines
             .iter()
             .find(|l| l.family == family && l.name == name && l.n == n && l.number == "f32")
