@@ -468,24 +468,54 @@ pub fn engine_mount_scaled<T: Real>(
 /// moving by up to 1 mm and 0.02 rad about a wandering axis (the motion a
 /// mount sees), for [`engine_mount`].
 pub fn mount_motion<T: Real, const N: usize>() -> [[Pose<T>; 2]; N] {
+    mount_motion_scaled(1.0)
+}
+
+/// [`mount_motion`] with every excursion from the rest pose times `scale`.
+pub fn mount_motion_scaled<T: Real, const N: usize>(scale: f64) -> [[Pose<T>; 2]; N] {
+    mount_path(|i| {
+        let t = 2.0 * PI * i as f64 / 100.0;
+        [
+            0.5 * libm::sin(t),
+            0.3 * libm::cos(t),
+            libm::sin(2.0 * t),
+            0.02 * libm::sin(t),
+            0.01 * libm::cos(3.0 * t),
+            0.015 * libm::sin(2.0 * t),
+        ]
+        .map(|v| scale * v)
+    })
+}
+
+/// The mount's second node on band-limited noise ([`band_noise`], one
+/// seed per axis from `seed`): translations of RMS `0.5 scale` and
+/// rotations of RMS `0.01 scale` about the rest pose.
+pub fn mount_noise<T: Real, const N: usize>(scale: f64, seed: u64) -> [[Pose<T>; 2]; N] {
+    let axis = |k: u64, rms: f64| band_noise::<f64, N>(rms * scale, 0.02, seed.wrapping_add(k));
+    let paths = [
+        axis(0, 0.5),
+        axis(1, 0.5),
+        axis(2, 0.5),
+        axis(3, 0.01),
+        axis(4, 0.01),
+        axis(5, 0.01),
+    ];
+    mount_path(|i| paths.map(|p| p.get(i).copied().unwrap_or(0.0)))
+}
+
+/// Node 1 at rest, node 2 at 40 mm along z plus `offset(i)` (translation
+/// in mm, then rotation vector in rad) at each of the `N` samples.
+fn mount_path<T: Real, const N: usize>(offset: impl Fn(usize) -> [f64; 6]) -> [[Pose<T>; 2]; N] {
     let rest = Pose {
         position: [T::ZERO, T::ZERO, T::ZERO],
         orientation: Quat::identity(),
     };
     let mut out = [[rest; 2]; N];
     for (i, pair) in out.iter_mut().enumerate() {
-        let t = 2.0 * PI * i as f64 / 100.0;
+        let [x, y, z, rx, ry, rz] = offset(i);
         pair[1] = Pose {
-            position: [
-                T::from_f64(0.5 * libm::sin(t)),
-                T::from_f64(0.3 * libm::cos(t)),
-                T::from_f64(40.0 + libm::sin(2.0 * t)),
-            ],
-            orientation: Quat::from_rotation_vector([
-                0.02 * libm::sin(t),
-                0.01 * libm::cos(3.0 * t),
-                0.015 * libm::sin(2.0 * t),
-            ]),
+            position: [T::from_f64(x), T::from_f64(y), T::from_f64(40.0 + z)],
+            orientation: Quat::from_rotation_vector([rx, ry, rz]),
         };
     }
     out

@@ -18,9 +18,9 @@ kernel target=m4f type=f32 family=maxwell name=rate-midpoint/plain n=4 per_call=
 kernel target=m4f type=f32 family=maxwell name=load-explicit/plain n=16 per_call=331.0 net=323.0 state_bytes=64 params_bytes=864 fn=0x00001d9c
 kernel target=m4f type=f32 family=maxwell-force name=rate-exact-ramp/plain n=8 per_call=71.0 net=69.9 state_bytes=32 params_bytes=448 fn=0x00007a5c
 kernel target=m4f type=f32 family=maxwell-force name=rate-exact-ramp/multiplied n=8 per_call=65.0 net=64.0 state_bytes=32 params_bytes=448 fn=0x00006ce0
-kernel target=m4f type=f32 family=iwan name=clamp/log n=16 input=sine-2mm per_call=155.6 net=147.6 state_bytes=72 params_bytes=264 fn=0x000008a0
-kernel target=m4f type=f32 family=iwan name=clamp/log n=16 input=sine-0.01mm per_call=472.0 net=465.0 state_bytes=72 params_bytes=264 fn=0x000008a0
-kernel target=m4f type=f32 family=iwan name=clamp/log n=16 input=noise-1mm per_call=288.0 net=281.0 state_bytes=72 params_bytes=264 fn=0x000008a0
+kernel target=m4f type=f32 family=iwan name=clamp/log n=16 input=sine per_call=155.6 net=147.6 state_bytes=72 params_bytes=264 fn=0x000008a0
+kernel target=m4f type=f32 family=iwan name=clamp/log n=16 input=small-sine per_call=472.0 net=465.0 state_bytes=72 params_bytes=264 fn=0x000008a0
+kernel target=m4f type=f32 family=iwan name=clamp/log n=16 input=noise per_call=288.0 net=281.0 state_bytes=72 params_bytes=264 fn=0x000008a0
 kernel target=m4f type=f32 family=iwan name=clamp/log n=4 per_call=94.2 net=86.2 state_bytes=24 params_bytes=72 fn=0x00003398
 kernel target=m4f type=f32 family=xf name=midpoint n=1 per_call=138.1 net=131.1 state_bytes=4 params_bytes=40 fn=0x00002778
 kernel target=m4f type=f32 family=xf name=exact-ramp n=1 per_call=147.4 net=140.4 state_bytes=4 params_bytes=40 fn=0x00002778
@@ -244,7 +244,7 @@ fn targets_are_judged_from_the_firmware_lines() {
     // Judged on its worst input: 465 / 16 instructions a cell.
     let iwan = goal("clamp Iwan");
     assert_eq!(iwan.measured, Some(465.0 / 16.0));
-    assert!(!iwan.met() && iwan.note.contains("worst input sine-0.01mm"));
+    assert!(!iwan.met() && iwan.note.contains("worst input small-sine"));
     assert!(goal("default 1D bushing").met());
     assert!(!goal("EKF").met());
     assert!(!goal("UKF").met());
@@ -302,7 +302,7 @@ fn a_kernel_on_several_inputs_is_costed_on_its_worst() {
         .find(|r| r.key.family == "iwan" && r.key.name == "clamp/log" && r.key.n == 16)
         .expect("the 16-cell clamp bank");
     assert_eq!(row.m4f, Some(465.0));
-    assert_eq!(row.m4f_input.as_deref(), Some("sine-0.01mm"));
+    assert_eq!(row.m4f_input.as_deref(), Some("small-sine"));
     let md = &report.markdown;
     assert!(md.contains("## Cost by input"));
     // The row of the input table: each input, the worst and its ratio to
@@ -315,12 +315,12 @@ fn a_kernel_on_several_inputs_is_costed_on_its_worst() {
         line.contains("- (148)") && line.contains("- (465)") && line.contains("- (281)"),
         "{line}"
     );
-    assert!(line.contains("sine-0.01mm | 3.15 |"), "{line}");
+    assert!(line.contains("small-sine | 3.15 |"), "{line}");
     // The same kernel twice on one input is still a duplicate.
     let mut again = inputs();
     again.kernels.push((
         "again.txt".into(),
-        "kernel target=m4f type=f32 family=iwan name=clamp/log n=16 input=noise-1mm per_call=1 net=1\n"
+        "kernel target=m4f type=f32 family=iwan name=clamp/log n=16 input=noise per_call=1 net=1\n"
             .into(),
     ));
     let e = accuracy_cost::generate(&again, &Options::quick())

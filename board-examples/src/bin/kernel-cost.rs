@@ -45,7 +45,7 @@ mod firmware {
     use bushing_kernels::{
         DT, IwanOscillator, MountEffects, band_noise, berg, bouc_wen, composite, dahl,
         default_bushing, drives, engine_mount, grunwald, iwan_bank, iwan_oscillator, jenkins,
-        maxwell_bank, mount_motion, polynomial, sine, spline, sts16, xf2,
+        maxwell_bank, mount_motion_scaled, mount_noise, polynomial, sine, spline, sts16, xf2,
     };
     use cortex_m_rt::entry;
     use cortex_m_semihosting::hprintln;
@@ -62,8 +62,8 @@ mod firmware {
     const NOISE_RMS: f64 = 1.0;
     const NOISE_CORNER: f64 = 0.02;
     const NOISE_SEED: u64 = 23;
-    /// The input of kernels that run on their own signal (trackers, the
-    /// oscillator, the 6-DOF mount, re-tuning).
+    /// The input of the kernels that take no signal (re-tuning, the WLF
+    /// factor, the first-period fit): one fixed set of arguments.
     const OWN: &str = "own";
 
     /// The inputs every displacement-driven kernel is measured on; the
@@ -83,9 +83,24 @@ mod firmware {
 
         fn name(self) -> &'static str {
             match self {
-                Self::LargeSine => "sine-2mm",
-                Self::SmallSine => "sine-0.01mm",
-                Self::Noise => "noise-1mm",
+                Self::LargeSine => "sine",
+                Self::SmallSine => "small-sine",
+                Self::Noise => "noise",
+            }
+        }
+
+        /// The input for a kernel whose nominal signal is a sine of
+        /// `amplitude` over `period` samples: that sine, the same at
+        /// `SMALL / AMPLITUDE` of it, or band-limited noise of
+        /// `NOISE_RMS / AMPLITUDE` of it, in f32.
+        fn signal(self, amplitude: f64, period: usize) -> [f32; STEPS] {
+            let scale = amplitude / AMPLITUDE;
+            match self {
+                Self::LargeSine => sine::<f32, STEPS>(amplitude, period),
+                Self::SmallSine => sine::<f32, STEPS>(SMALL * scale, period),
+                Self::Noise => {
+                    band_noise::<f32, STEPS>(NOISE_RMS * scale, NOISE_CORNER, NOISE_SEED)
+                }
             }
         }
 
@@ -424,10 +439,23 @@ mod firmware {
     }
 
     /// One 6-DOF engine mount (six 1D laws of 2 Maxwell and 3 Jenkins
-    /// cells) in each connectivity, over its motion.
+    /// cells) in each connectivity, over its motion: the mount's cycle (up
+    /// to 1 mm and 0.02 rad), the same at 0.005 of it, or band-limited
+    /// noise (0.5 mm and 0.01 rad RMS per axis).
     fn six_dof() {
         const N: usize = 100;
-        let motion = mount_motion::<f32, N>();
+        for input in Input::ALL {
+            let motion = match input {
+                Input::LargeSine => mount_motion_scaled::<f32, N>(1.0),
+                Input::SmallSine => mount_motion_scaled::<f32, N>(SMALL / AMPLITUDE),
+                Input::Noise => mount_noise::<f32, N>(NOISE_RMS / AMPLITUDE * 2.0, NOISE_SEED),
+            };
+            six_dof_on(input, &motion);
+        }
+    }
+
+    /// [`six_dof`] on one motion.
+    fn six_dof_on<const N: usize>(input: Input, motion: &[[Pose<f32>; 2]; N]) {
         for (connectivity, name) in [
             (Connectivity::Attached, "mount/attached"),
             (Connectivity::Invariant, "mount/invariant"),
@@ -435,11 +463,13 @@ mod firmware {
             let Ok(b) = engine_mount::<f32>(connectivity) else {
                 fail()
             };
+            let Some([n1, n2]) = motion.first() else {
+                fail()
+            };
             let run = |kernel: fn(&Mount, &mut MountState, &[Pose<f32>; 2]) -> Loads<f32>| {
-                let [n1, n2] = &motion[0];
                 let mut s = b.state_at(n1, n2);
                 ticks(|| {
-                    for nodes in &motion {
+                    for nodes in motion {
                         black_box(kernel(&b, &mut s, black_box(nodes)));
                     }
                 })
@@ -447,14 +477,13 @@ mod firmware {
             let t = run(six_dof_step);
             let empty = run(six_dof_empty);
             let baseline = ticks(|| {
-                for nodes in &motion {
+                for nodes in motion {
                     black_box(black_box(nodes));
                 }
             });
-            let [n1, n2] = &motion[0];
             let line = Line {
                 number: "f32",
-                input: OWN,
+                input: input.name(),
                 family: "six-dof",
                 name,
                 n: 6,
@@ -516,44 +545,43 @@ mod firmware {
         ) else {
             fail()
         };
-        // A 20 Hz sine at 1 kHz by a rotation recurrence (a few
-        // instructions, in every loop below).
-        let run = |kernel: &mut dyn FnMut(&mut TrackerState<N>, &[f32; S])| {
-            let mut state = tracker.start();
-            let (c, s) = (0.992_114_7f32, 0.125_333_2f32);
-            let (mut re, mut im) = (1.0f32, 0.0f32);
-            ticks(|| {
-                for _ in 0..STEPS {
-                    let r = c * re - s * im;
-                    im = s * re + c * im;
-                    re = r;
-                    let shape = [1.0f32, 2.0, -1.8];
-                    let samples: [f32; S] = core::array::from_fn(|i| re * shape[i % 3]);
-                    kernel(&mut state, &samples);
-                }
-            })
-        };
-        let t = run(&mut |state, y| {
-            black_box(tracker_step(&tracker, state, y));
-        });
-        let empty = run(&mut |state, y| {
-            black_box(tracker_empty(&tracker, state, y));
-        });
-        let baseline = run(&mut |_, y| {
-            black_box(y);
-        });
-        let f: TrackerStep<N> = tracker_step::<N>;
-        let line = Line {
-            number: "f32",
-            input: OWN,
-            family: "tracker",
-            name,
-            n: N,
-            state_bytes: size_of_val(&tracker.start()),
-            params_bytes: size_of_val(&tracker),
-            function: f as usize,
-        };
-        report(&line, t, empty, baseline, STEPS);
+        // The accelerations: a 20 Hz sine of amplitude 1 at 1 kHz, the
+        // same at 0.005 (below the sensors' noise: the tracker fades the
+        // mode), or band-limited noise; times mode-shape-like factors.
+        for input in Input::ALL {
+            let xs = input.signal(1.0, 50);
+            let run = |kernel: &mut dyn FnMut(&mut TrackerState<N>, &[f32; S])| {
+                let mut state = tracker.start();
+                ticks(|| {
+                    for &x in &xs {
+                        let shape = [1.0f32, 2.0, -1.8];
+                        let samples: [f32; S] = core::array::from_fn(|i| x * shape[i % 3]);
+                        kernel(&mut state, &samples);
+                    }
+                })
+            };
+            let t = run(&mut |state, y| {
+                black_box(tracker_step(&tracker, state, y));
+            });
+            let empty = run(&mut |state, y| {
+                black_box(tracker_empty(&tracker, state, y));
+            });
+            let baseline = run(&mut |_, y| {
+                black_box(y);
+            });
+            let f: TrackerStep<N> = tracker_step::<N>;
+            let line = Line {
+                number: "f32",
+                input: input.name(),
+                family: "tracker",
+                name,
+                n: N,
+                state_bytes: size_of_val(&tracker.start()),
+                params_bytes: size_of_val(&tracker),
+                function: f as usize,
+            };
+            report(&line, t, empty, baseline, STEPS);
+        }
     }
 
     #[inline(never)]
@@ -565,31 +593,37 @@ mod firmware {
         o.step(s, f)
     }
 
-    /// The reference Iwan oscillator of seed 004 in free decay from 1.5.
+    /// The reference Iwan oscillator of seed 004 from rest under a force:
+    /// a sine of 9 over 100 steps (1.5 times the backbone's stiffness of 6,
+    /// a static displacement of 1.5 inside the cells' slip distances of 0.2
+    /// to 2), the same at 0.005 of it, or band-limited noise.
     fn oscillator() {
         let Ok(osc) = iwan_oscillator() else { fail() };
-        let mut s = osc.state_at(1.5, 0.0, 0.0);
-        let t = ticks(|| {
-            for _ in 0..STEPS {
-                black_box(oscillator_step(&osc, &mut s, black_box(0.0)));
-            }
-        });
-        let baseline = ticks(|| {
-            for _ in 0..STEPS {
-                black_box(black_box(0.0f32));
-            }
-        });
-        let line = Line {
-            number: "f32",
-            input: OWN,
-            family: "oscillator",
-            name: "iwan-20/newmark",
-            n: 20,
-            state_bytes: size_of_val(&s),
-            params_bytes: size_of_val(&osc),
-            function: oscillator_step as *const () as usize,
-        };
-        report(&line, t, baseline, baseline, STEPS);
+        for input in Input::ALL {
+            let fs = input.signal(9.0, PERIOD);
+            let mut s = osc.state_at(0.0, 0.0, 0.0);
+            let t = ticks(|| {
+                for f in &fs {
+                    black_box(oscillator_step(&osc, &mut s, *black_box(f)));
+                }
+            });
+            let baseline = ticks(|| {
+                for f in &fs {
+                    black_box(*black_box(f));
+                }
+            });
+            let line = Line {
+                number: "f32",
+                input: input.name(),
+                family: "oscillator",
+                name: "iwan-20/newmark",
+                n: 20,
+                state_bytes: size_of_val(&s),
+                params_bytes: size_of_val(&osc),
+                function: oscillator_step as *const () as usize,
+            };
+            report(&line, t, baseline, baseline, STEPS);
+        }
     }
 
     #[inline(never)]
@@ -633,51 +667,59 @@ mod firmware {
         ) else {
             fail()
         };
-        let signal = |kernel: &mut dyn FnMut(f32, f32)| {
-            let (c, s) = (0.992_114_7f32, 0.125_333_2f32);
-            let (mut re, mut im) = (1.0f32, 0.0f32);
-            ticks(|| {
-                for _ in 0..STEPS {
-                    let r = c * re - s * im;
-                    im = s * re + c * im;
-                    re = r;
-                    kernel(re, im);
-                }
-            })
-        };
-        let baseline = signal(&mut |re, im| {
-            black_box((re, im));
-        });
-        let mut state = tracker.start();
-        let t = signal(&mut |re, _| {
-            let _ = black_box(sine_step(&tracker, &mut state, re));
-        });
-        let line = Line {
-            number: "f32",
-            input: OWN,
-            family: "sine-tracker",
-            name: "sine/2-states",
-            n: 2,
-            state_bytes: size_of_val(&state),
-            params_bytes: size_of_val(&tracker),
-            function: sine_step as *const () as usize,
-        };
-        report(&line, t, baseline, baseline, STEPS);
-        let mut state = modulus.start();
-        let t = signal(&mut |re, im| {
-            black_box(modulus_step(&modulus, &mut state, re, 0.9 * re - 0.2 * im));
-        });
-        let line = Line {
-            number: "f32",
-            input: OWN,
-            family: "sine-tracker",
-            name: "modulus/x-and-f",
-            n: 4,
-            state_bytes: size_of_val(&state),
-            params_bytes: size_of_val(&modulus),
-            function: modulus_step as *const () as usize,
-        };
-        report(&line, t, baseline, baseline, STEPS);
+        // The displacement: a 20 Hz sine of amplitude 1 at 1 kHz, the same
+        // at 0.005 (below the channel's noise), or band-limited noise; the
+        // force 0.9 x less 0.2 of the previous x.
+        for input in Input::ALL {
+            let xs = input.signal(1.0, 50);
+            let signal = |kernel: &mut dyn FnMut(f32, f32)| {
+                ticks(|| {
+                    let mut previous = 0.0f32;
+                    for &x in &xs {
+                        kernel(x, previous);
+                        previous = x;
+                    }
+                })
+            };
+            let baseline = signal(&mut |x, previous| {
+                black_box((x, previous));
+            });
+            let mut state = tracker.start();
+            let t = signal(&mut |x, _| {
+                let _ = black_box(sine_step(&tracker, &mut state, x));
+            });
+            let line = Line {
+                number: "f32",
+                input: input.name(),
+                family: "sine-tracker",
+                name: "sine/2-states",
+                n: 2,
+                state_bytes: size_of_val(&state),
+                params_bytes: size_of_val(&tracker),
+                function: sine_step as *const () as usize,
+            };
+            report(&line, t, baseline, baseline, STEPS);
+            let mut state = modulus.start();
+            let t = signal(&mut |x, previous| {
+                black_box(modulus_step(
+                    &modulus,
+                    &mut state,
+                    x,
+                    0.9 * x - 0.2 * previous,
+                ));
+            });
+            let line = Line {
+                number: "f32",
+                input: input.name(),
+                family: "sine-tracker",
+                name: "modulus/x-and-f",
+                n: 4,
+                state_bytes: size_of_val(&state),
+                params_bytes: size_of_val(&modulus),
+                function: modulus_step as *const () as usize,
+            };
+            report(&line, t, baseline, baseline, STEPS);
+        }
     }
 
     type Bank8 = MaxwellBank<f32, 8, Plain<f32>>;

@@ -105,8 +105,8 @@ pub struct KernelLine {
     pub name: String,
     /// `n=`: order (cells, taps, states).
     pub n: usize,
-    /// `input=`: the input the kernel ran on (`sine-2mm`, `sine-0.01mm`,
-    /// `noise-1mm`, or `own` for a kernel on its own signal). Lines of
+    /// `input=`: the input the kernel ran on (`sine`, `small-sine`,
+    /// `noise`, or `own` for a kernel that takes no signal). Lines of
     /// the same kernel on several inputs are merged into the costliest,
     /// which keeps this name.
     pub input: Option<String>,

@@ -1002,13 +1002,16 @@ fn input_table(s: &mut String, lines: &[KernelLine]) {
     let _ = writeln!(
         s,
         "\n## Cost by input\n\n\
-         Every kernel driven by a displacement runs on three inputs: the sine of the accuracy \
-         figures (2 mm, 100 samples a period), the same sine at 0.01 mm (below the smallest slip \
-         displacement of every Iwan bank, so that no held cell is skipped) and band-limited noise \
-         (1 mm RMS, two poles at 2 % of the sample rate, seeded). Every table above takes a \
-         kernel's worst input (by estimated M4F cycles) and names it. Kernels on their own signal \
-         (trackers, oscillator, 6-DOF mount, re-tuning) have one input, `own`. Cortex-M4F, f32, \
-         estimated cycles (instructions) per call, net of the call:\n"
+         Every kernel that takes a signal runs on three inputs: `sine`, its nominal sine (2 mm \
+         and 100 samples a period for a bushing or an effect; amplitude 1 at 20 Hz and 1 kHz for \
+         the trackers; a force of 9 for the oscillator; the mount's cycle of up to 1 mm and \
+         0.02 rad), `small-sine`, the same at 0.005 of it (0.01 mm: below the smallest slip \
+         displacement of every Iwan bank, so that no held cell is skipped; below the sensors' \
+         noise for the trackers), and `noise`, band-limited noise of half the sine's amplitude \
+         as RMS (two poles at 2 % of the sample rate, seeded). Every table above takes a kernel's \
+         worst input (by estimated M4F cycles) and names it. The kernels that take no signal \
+         (re-tuning, the WLF factor, the first-period fit) have one input, `own`. Cortex-M4F, \
+         f32, estimated cycles (instructions) per call, net of the call:\n"
     );
     let mut names: Vec<String> = Vec::new();
     for l in lines {
