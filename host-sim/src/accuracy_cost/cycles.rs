@@ -284,13 +284,13 @@ fn base(mnemonic: &str) -> Option<&'static str> {
 
 /// Every base mnemonic the tables name; anything else is a 1-cycle
 /// data-processing instruction.
-const KNOWN: [&str; 64] = [
+const KNOWN: [&str; 66] = [
     "b", "bl", "bx", "blx", "cbz", "cbnz", "tbb", "tbh", "ldr", "ldrb", "ldrh", "ldrsb", "ldrsh",
     "ldrex", "str", "strb", "strh", "strex", "ldrd", "strd", "ldm", "ldmia", "ldmdb", "stm",
     "stmia", "stmdb", "push", "pop", "mul", "mla", "mls", "umull", "smull", "umlal", "smlal",
     "umaal", "sdiv", "udiv", "vldr", "vstr", "vldm", "vldmia", "vldmdb", "vstm", "vstmia",
     "vstmdb", "vpush", "vpop", "vmla", "vmls", "vnmla", "vnmls", "vfma", "vfms", "vfnma", "vfnms",
-    "vdiv", "vsqrt", "vadd", "vsub", "vmul", "vnmul", "vcvt", "vmov",
+    "vdiv", "vsqrt", "vadd", "vsub", "vmul", "vnmul", "vcvt", "vmov", "vabs", "vneg",
 ];
 
 /// The FPU registers named in `text` (`s3`, `d1`, `{s0-s7}`, `{d8-d9}`).
@@ -454,6 +454,8 @@ fn decode(mnemonic: &str, operands: &str) -> Op {
     if writes_pc(base, operands) {
         op.kind = Kind::Branch;
     }
+    // One cycle, and no result stall after them (the TRM's list leaves
+    // them out), but they write their first operand.
     if matches!(base, "vabs" | "vneg") {
         op.writes = first;
         op.reads = regs & !first;
@@ -691,6 +693,7 @@ mod tests {
         assert_eq!(base("mls"), Some("mls"));
         assert_eq!(base("vldmia"), Some("vldmia"));
         assert_eq!(base("umlal"), Some("umlal"));
+        assert_eq!(base("vnegmi.f32"), Some("vneg"));
     }
 
     #[test]
@@ -711,6 +714,12 @@ mod tests {
             (0x18, "vadd.f32", "s0, s0, s3"),
         ]);
         assert_eq!(cycles(&d, Core::M4, 0x10, 0x1c, 3), 1 + 1 + 2);
+        // A negation overwriting the result it follows reads nothing of it.
+        let d = dis(&[
+            (0x10, "vmul.f32", "s0, s1, s2"),
+            (0x14, "vneg.f32", "s0, s3"),
+        ]);
+        assert_eq!(cycles(&d, Core::M4, 0x10, 0x18, 2), 1 + 1);
     }
 
     #[test]
