@@ -54,6 +54,10 @@ valgrind --version
 
 . scripts/target-dir.sh
 echo "cargo builds into $target"
+# A test run builds everything once: incremental state would only fill the
+# disk (over a gigabyte for the host tests alone).
+export CARGO_INCREMENTAL=0
+df -h . | tail -n 1 | awk '{print "disk: " $4 " free of " $2}'
 
 step "format"
 cargo fmt --all -- --check
