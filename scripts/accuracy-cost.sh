@@ -12,7 +12,9 @@
 #    floating point), with the bushing-qemu-mix plugin recording the
 #    instructions each measurement executed; keeps each output, mix, ELF and
 #    disassembly (llvm-objdump of rustup's llvm-tools) in
-#    target/accuracy-cost/;
+#    target/accuracy-cost/; then the headline kernels alone in a binary of
+#    their own (feature headline-only), on the Cortex-M4F, for the spread
+#    of the harness between builds;
 # 2. runs kalman-peers on the host and on the Cortex-M4F when the firmware
 #    crate has that binary;
 # 3. runs `bushing-sim accuracy-cost` on those files.
@@ -43,6 +45,20 @@ plugin="$target/release/libbushing_qemu_mix.so"
 objdump="$(rustc --print sysroot)/lib/rustlib/$(rustc -vV | sed -n 's/^host: //p')/bin/llvm-objdump"
 [ -x "$objdump" ] || { echo "error: no $objdump (rustup component add llvm-tools)" >&2; exit 1; }
 
+# Runs an ELF of the kernel-cost firmware under QEMU with the plugin:
+#   measure ELF LOG MIX MACHINE-ARGS...
+# and writes its disassembly beside the ELF (.dis for .elf).
+measure() {
+    local elf=$1 log=$2 mix=$3
+    shift 3
+    rm -f "$log" "$mix"
+    # The runner of .cargo/config.toml, with the plugin.
+    timeout -k 5 300 qemu-system-arm "$@" -nographic \
+        -semihosting-config enable=on,target=native -icount shift=0,sleep=off \
+        -plugin "$plugin,elf=$elf,out=$mix" -kernel "$elf" >"$log"
+    "$objdump" -d --no-show-raw-insn "$elf" >"${elf%.elf}.dis"
+}
+
 kernels=()
 elfs=()
 mixes=()
@@ -60,18 +76,25 @@ for triple in thumbv7em-none-eabihf thumbv7m-none-eabi; do
     cp "$target/$triple/release/kernel-cost" "$elf"
     log="$work/kernel-cost-$triple.txt"
     mix="$work/mix-$triple.txt"
-    rm -f "$log" "$mix"
-    # The runner of .cargo/config.toml, with the plugin.
-    timeout -k 5 300 qemu-system-arm "${machine[@]}" -nographic \
-        -semihosting-config enable=on,target=native -icount shift=0,sleep=off \
-        -plugin "$plugin,elf=$elf,out=$mix" -kernel "$elf" >"$log"
-    "$objdump" -d --no-show-raw-insn "$elf" >"$work/kernel-cost-$triple.dis"
+    measure "$elf" "$log" "$mix" "${machine[@]}"
     grep -c '^kernel ' "$log" | sed "s/^/    kernel lines: /"
     kernels+=("$log")
     elfs+=("$triple=$elf")
     mixes+=("$triple=$mix")
     disassemblies+=("$triple=$work/kernel-cost-$triple.dis")
 done
+
+# The headline kernels again, in a binary of their own (feature
+# headline-only): the harness's spread between two builds.
+echo "==> kernel-cost, headline kernels alone, on thumbv7em-none-eabihf (QEMU, with the plugin)"
+cargo build -q --release -p bushing-boards --target thumbv7em-none-eabihf --bin kernel-cost \
+    --features headline-only
+alone="$work/kernel-cost-headline.elf"
+cp "$target/thumbv7em-none-eabihf/release/kernel-cost" "$alone"
+measure "$alone" "$work/kernel-cost-headline.txt" "$work/mix-headline.txt" \
+    -machine mps2-an386 -cpu cortex-m4
+headline=(--headline-kernels "$work/kernel-cost-headline.txt"
+    --headline-mix "$work/mix-headline.txt" --headline-disassembly "$work/kernel-cost-headline.dis")
 
 peers=()
 if grep -q 'kalman-peers' board-examples/Cargo.toml; then
@@ -98,12 +121,8 @@ if [ ${#mode[@]} -eq 0 ]; then
     RUSTFLAGS="-C target-cpu=generic" CARGO_TARGET_DIR="$generic/target" \
         cargo build -q --release -p bushing-boards --target thumbv7em-none-eabihf --bin kernel-cost
     cp "$generic/target/thumbv7em-none-eabihf/release/kernel-cost" "$generic/kernel-cost.elf"
-    rm -f "$generic/kernel-cost.txt" "$generic/mix.txt"
-    timeout -k 5 300 qemu-system-arm -machine mps2-an386 -cpu cortex-m4 -nographic \
-        -semihosting-config enable=on,target=native -icount shift=0,sleep=off \
-        -plugin "$plugin,elf=$generic/kernel-cost.elf,out=$generic/mix.txt" \
-        -kernel "$generic/kernel-cost.elf" >"$generic/kernel-cost.txt"
-    "$objdump" -d --no-show-raw-insn "$generic/kernel-cost.elf" >"$generic/kernel-cost.dis"
+    measure "$generic/kernel-cost.elf" "$generic/kernel-cost.txt" "$generic/mix.txt" \
+        -machine mps2-an386 -cpu cortex-m4
     other=(--other-build "target-cpu=generic" --other-kernels "$generic/kernel-cost.txt"
         --other-mix "$generic/mix.txt" --other-disassembly "$generic/kernel-cost.dis")
 fi
@@ -120,7 +139,7 @@ fi
 echo "==> bushing-sim accuracy-cost ${mode[*]:-} --out $out"
 args=(accuracy-cost ${mode[@]+"${mode[@]}"} --kernels "${kernels[@]}" --elf "${elfs[@]}"
     --mix "${mixes[@]}" --disassembly "${disassemblies[@]}" ${mca[@]+"${mca[@]}"}
-    ${other[@]+"${other[@]}"})
+    ${other[@]+"${other[@]}"} "${headline[@]}")
 if [ ${#peers[@]} -gt 0 ]; then
     args+=(--peers "${peers[@]}")
 fi

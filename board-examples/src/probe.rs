@@ -5,7 +5,15 @@
 //! Each measurement is also a numbered window between calls of
 //! [`window_open`] and [`window_close`]: the `bushing-qemu-mix` QEMU plugin
 //! records which instructions ran in each window, for cycle estimates.
+//!
+//! [`measure`] is the one harness every kernel is measured with, whatever
+//! its shape: a loop, compiled once, that calls a [`Kernel`] through a
+//! trait object. A kernel and its stand-in (the same signature, nothing
+//! computed) run through the same [`Calls::call`], so their difference is
+//! the kernel's own code, and does not depend on what else the binary
+//! holds.
 
+use core::hint::black_box;
 use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m::peripheral::{SYST, syst::SystClkSource};
@@ -33,16 +41,8 @@ pub struct Span {
     /// SysTick ticks (at most 2^24 - 1: about 670 million instructions).
     pub ticks: u32,
     /// The window's number, counted from 0 in the order of the calls of
-    /// [`span`]; `None` for a stand-in that measured nothing.
+    /// [`span`]; `None` when a harness opened none.
     pub window: Option<u32>,
-}
-
-impl Span {
-    /// Nothing measured: zero ticks, no window.
-    pub const NONE: Self = Self {
-        ticks: 0,
-        window: None,
-    };
 }
 
 /// Windows opened so far.
@@ -85,6 +85,96 @@ pub fn span(f: impl FnOnce()) -> Span {
 /// instructions).
 pub fn ticks(f: impl FnOnce()) -> u32 {
     span(f).ticks
+}
+
+/// Something to call once per input, as the harness sees it.
+pub trait Kernel {
+    /// Calls on the `i`-th input; nothing when there is none.
+    fn call(&mut self, i: usize);
+    /// How many inputs there are.
+    fn calls(&self) -> usize;
+}
+
+/// A public step measured over a run of inputs: `kernel(params, &mut
+/// state, &inputs[i])` for each `i`, its result kept (`black_box`).
+///
+/// The function is a field, not a type: a kernel and its stand-in of the
+/// same signature share one compiled [`Kernel::call`].
+pub struct Calls<'a, P: ?Sized, S, I, O> {
+    /// The parameters, read only.
+    pub params: &'a P,
+    /// The state the calls advance.
+    pub state: S,
+    /// One input per call.
+    pub inputs: &'a [I],
+    /// The function called.
+    pub kernel: fn(&P, &mut S, &I) -> O,
+}
+
+impl<P: ?Sized, S, I, O> Kernel for Calls<'_, P, S, I, O> {
+    #[inline(never)]
+    fn call(&mut self, i: usize) {
+        if let Some(x) = self.inputs.get(i) {
+            black_box((self.kernel)(self.params, &mut self.state, black_box(x)));
+        }
+    }
+
+    fn calls(&self) -> usize {
+        self.inputs.len()
+    }
+}
+
+/// The harness with nothing to call: its window is the loop and the
+/// dispatch alone.
+struct Idle(usize);
+
+impl Kernel for Idle {
+    #[inline(never)]
+    fn call(&mut self, i: usize) {
+        black_box(i);
+    }
+
+    fn calls(&self) -> usize {
+        self.0
+    }
+}
+
+/// The harness: every call of `kernel`, in one window. Not inlined and not
+/// generic, so that its loop is the same code for every kernel.
+#[inline(never)]
+pub fn measure(kernel: &mut dyn Kernel) -> Span {
+    let calls = kernel.calls();
+    span(|| {
+        for i in 0..calls {
+            kernel.call(i);
+        }
+    })
+}
+
+/// The three windows of one kernel over `inputs`, each from the state
+/// `fresh` gives: the kernel, its stand-in, and the idle harness. The
+/// kernel less the stand-in is what the kernel adds to a call; the kernel
+/// less the idle harness is the whole call, the harness's dispatch and
+/// input fetch included.
+pub fn measure_three<P: ?Sized, S, I, O>(
+    params: &P,
+    fresh: impl Fn() -> S,
+    inputs: &[I],
+    kernel: fn(&P, &mut S, &I) -> O,
+    stand_in: fn(&P, &mut S, &I) -> O,
+) -> [Span; 3] {
+    let run = |f: fn(&P, &mut S, &I) -> O| {
+        measure(&mut Calls {
+            params,
+            state: fresh(),
+            inputs,
+            kernel: f,
+        })
+    };
+    let t = run(kernel);
+    let e = run(stand_in);
+    let idle = measure(&mut Idle(inputs.len()));
+    [t, e, idle]
 }
 
 /// Ends the run: QEMU exits with success.

@@ -311,6 +311,9 @@ pub struct Inputs {
     /// Another M4F build of the kernel-cost firmware (other flags), for
     /// the "Build flags" comparison ([`builds`]).
     pub other_build: Option<OtherBuild>,
+    /// The headline kernels alone in a binary of their own (same flags),
+    /// for the "Harness" section ([`builds::spread`]).
+    pub headline_build: Option<OtherBuild>,
 }
 
 /// Another build's kernel-cost output and instruction mix.
@@ -654,17 +657,15 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
     let footprints = read_footprints(&elfs);
     let builds = match &inputs.other_build {
         Some(o) => {
-            let mut other = firmware::parse_kernels(&o.kernels.0, &o.kernels.1)?;
-            let mix = cycles::Mix::parse(&o.mix.source, &o.mix.mix)?;
-            let dis = cycles::Disassembly::parse(&o.mix.disassembly);
-            cycles::attach(
-                &mut other,
-                &firmware::target_of_triple(&o.mix.triple),
-                &mix,
-                &dis,
-            )?;
-            let other = Lines::new(other)?;
+            let other = other_lines(o)?;
             builds::compare(&o.name, lines.by.values(), other.by.values())
+        }
+        None => None,
+    };
+    let spread = match &inputs.headline_build {
+        Some(o) => {
+            let other = other_lines(o)?;
+            builds::spread(&o.name, lines.by.values(), other.by.values())
         }
         None => None,
     };
@@ -677,6 +678,7 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
     };
     let context = report::Context {
         builds,
+        spread,
         mca,
         options: *options,
         inputs: inputs_summary(inputs),
@@ -711,6 +713,21 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
         csv,
         svg,
     })
+}
+
+/// Another build's kernel lines, with their estimated cycles, merged by
+/// input.
+fn other_lines(o: &OtherBuild) -> Result<Lines, Error> {
+    let mut other = firmware::parse_kernels(&o.kernels.0, &o.kernels.1)?;
+    let mix = cycles::Mix::parse(&o.mix.source, &o.mix.mix)?;
+    let dis = cycles::Disassembly::parse(&o.mix.disassembly);
+    cycles::attach(
+        &mut other,
+        &firmware::target_of_triple(&o.mix.triple),
+        &mix,
+        &dis,
+    )?;
+    Lines::new(other)
 }
 
 /// Lines whose `fn=` address is no function of their target's ELF: the
@@ -801,6 +818,9 @@ pub struct Command {
     /// `--other-build NAME --other-kernels FILE --other-mix FILE
     /// --other-disassembly FILE`: another M4F build to compare with.
     pub other_build: Option<(String, PathBuf, PathBuf, PathBuf)>,
+    /// `--headline-kernels FILE --headline-mix FILE --headline-disassembly
+    /// FILE`: the headline kernels alone in an M4F binary of their own.
+    pub headline_build: Option<(PathBuf, PathBuf, PathBuf)>,
     /// `--out DIR`: where `accuracy-cost.{md,csv,svg}` go.
     pub out: PathBuf,
 }
@@ -837,6 +857,18 @@ impl Command {
             })?;
             elfs.push((triple.clone(), bytes));
         }
+        let m4f = |name: &str, kernels: &PathBuf, mix: &PathBuf, dis: &PathBuf| {
+            Ok::<_, Error>(OtherBuild {
+                name: name.into(),
+                kernels: text(kernels)?,
+                mix: MixInput {
+                    triple: "thumbv7em-none-eabihf".into(),
+                    source: mix.display().to_string(),
+                    mix: text(mix)?.1,
+                    disassembly: text(dis)?.1,
+                },
+            })
+        };
         let mut mixes = Vec::with_capacity(self.mix.len());
         for (triple, path) in &self.mix {
             let Some((_, dis)) = self.disassembly.iter().find(|(t, _)| t == triple) else {
@@ -857,16 +889,11 @@ impl Command {
             mixes,
             llvm_mca: self.llvm_mca.clone(),
             other_build: match &self.other_build {
-                Some((name, kernels, mix, dis)) => Some(OtherBuild {
-                    name: name.clone(),
-                    kernels: text(kernels)?,
-                    mix: MixInput {
-                        triple: "thumbv7em-none-eabihf".into(),
-                        source: mix.display().to_string(),
-                        mix: text(mix)?.1,
-                        disassembly: text(dis)?.1,
-                    },
-                }),
+                Some((name, kernels, mix, dis)) => Some(m4f(name, kernels, mix, dis)?),
+                None => None,
+            },
+            headline_build: match &self.headline_build {
+                Some((kernels, mix, dis)) => Some(m4f("headline-only", kernels, mix, dis)?),
                 None => None,
             },
         })

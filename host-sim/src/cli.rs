@@ -86,7 +86,7 @@ pub enum Command {
         within: Option<f64>,
     },
     /// Error against cost of every kernel (docs/accuracy-cost.md).
-    AccuracyCost(AccuracyCostArgs),
+    AccuracyCost(Box<AccuracyCostArgs>),
     /// One part of a scene stepped alone (for `cost --instructions`).
     #[command(hide = true)]
     CostPart {
@@ -315,6 +315,17 @@ pub struct AccuracyCostArgs {
     /// The other build's disassembly.
     #[arg(long, value_name = "FILE", requires = "other_build")]
     other_disassembly: Option<PathBuf>,
+    /// The kernel-cost output of the headline kernels alone in an M4F
+    /// binary of their own (feature `headline-only`): the harness's spread
+    /// between binaries. Needs the two other --headline-* files.
+    #[arg(long, value_name = "FILE", requires_all = ["headline_mix", "headline_disassembly"])]
+    headline_kernels: Option<PathBuf>,
+    /// That binary's instruction mix.
+    #[arg(long, value_name = "FILE", requires = "headline_kernels")]
+    headline_mix: Option<PathBuf>,
+    /// That binary's disassembly.
+    #[arg(long, value_name = "FILE", requires = "headline_kernels")]
+    headline_disassembly: Option<PathBuf>,
     /// Where accuracy-cost.{md,csv,svg} go.
     #[arg(long)]
     out: PathBuf,
@@ -498,6 +509,10 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
                     a.other_disassembly,
                 ) {
                     (Some(n), Some(k), Some(m), Some(d)) => Some((n, k, m, d)),
+                    _ => None,
+                },
+                headline_build: match (a.headline_kernels, a.headline_mix, a.headline_disassembly) {
+                    (Some(k), Some(m), Some(d)) => Some((k, m, d)),
                     _ => None,
                 },
                 out: a.out,

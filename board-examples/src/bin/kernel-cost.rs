@@ -3,10 +3,18 @@
 //!
 //! Every kernel is called through an `#[inline(never)]` function whose body
 //! is the library's public call (`Effect::step`, `Bushing::step`,
-//! `ModalTracker::step`, ...), so the figure includes the call, the argument
-//! passing and the output, as a firmware pays them. The count is read from
-//! SysTick under QEMU `-icount shift=0` (one tick per 40 instructions),
-//! over many calls, net of the empty loop.
+//! `ModalTracker::step`, ...), and every one is measured by the same
+//! harness, `probe::measure`: the kernel, then a stand-in of the same
+//! signature, then the idle harness, each in a window of its own. The
+//! kernel less its stand-in (`net`) is what the kernel adds to a control
+//! loop; less the idle harness (`per_call`), the whole call. The counts are
+//! read from SysTick under QEMU `-icount shift=0` (one tick per 40
+//! instructions), and exactly from the windows by the `bushing-qemu-mix`
+//! plugin.
+//!
+//! With the feature `headline-only` the firmware measures only the
+//! report's headline kernels: a much smaller binary, in which the same
+//! kernels must cost the same (the report's "Harness" section).
 //!
 //! One line per kernel:
 //!
@@ -41,7 +49,7 @@ mod firmware {
         Exponentials, IwanBank, IwanSliders, MaxwellBank, OscillatorState, OscillatorStep,
         ShiftFactor,
     };
-    use bushing_boards::probe::{self, INSTRUCTIONS_PER_TICK, Span, span as ticks};
+    use bushing_boards::probe::{self, INSTRUCTIONS_PER_TICK, Span, measure_three};
     use bushing_kernels::{
         DT, IwanOscillator, MountEffects, band_noise, berg, bouc_wen, composite, dahl,
         default_bushing, drives, engine_mount, grunwald, iwan_bank, iwan_oscillator, jenkins,
@@ -113,17 +121,12 @@ mod firmware {
         }
     }
 
-    /// What the measurements on one input share: the displacements, the
-    /// drives the polynomial backbone gives for them, and the harness
-    /// baselines over each.
+    /// What the measurements on one input share: the displacements and
+    /// the drives the polynomial backbone gives for them.
     struct Run<'a, T> {
         input: &'static str,
         xs: &'a [T],
         drives: &'a [Drive<T>],
-        /// The loop over `drives` alone.
-        baseline: Span,
-        /// The loop over `xs` alone.
-        xs_baseline: Span,
     }
 
     /// Measures `each` on every input, in number type `T`.
@@ -132,22 +135,10 @@ mod firmware {
         for input in Input::ALL {
             let xs = input.xs::<T>();
             let ds = drives(&poly, &xs);
-            let baseline = ticks(|| {
-                for d in &ds {
-                    black_box(black_box(d));
-                }
-            });
-            let xs_baseline = ticks(|| {
-                for x in &xs {
-                    black_box(*black_box(x));
-                }
-            });
             each(&Run {
                 input: input.name(),
                 xs: &xs,
                 drives: &ds,
-                baseline,
-                xs_baseline,
             });
         }
     }
@@ -172,12 +163,13 @@ mod firmware {
         function: usize,
     }
 
-    /// Prints a line from the loop's ticks with the kernel (`t`), with an
-    /// empty function of the same signature (`empty`) and with nothing
-    /// (`baseline`), over `calls` passes: `per_call` counts the call, the
-    /// return and the harness's use of the result; `net` only what the
-    /// kernel itself adds (what it costs inlined into a control loop).
-    fn report(line: &Line<'_>, t: Span, empty: Span, baseline: Span, calls: usize) {
+    /// Prints a line from the windows of `probe::measure_three` over
+    /// `calls` calls: the kernel (`t`), its stand-in of the same signature
+    /// (`empty`) and the idle harness (`baseline`). `per_call` counts the
+    /// call, the return and the harness's dispatch and use of the result;
+    /// `net` only what the kernel itself adds (what it costs inlined into a
+    /// control loop).
+    fn report(line: &Line<'_>, [t, empty, baseline]: [Span; 3], calls: usize) {
         let tenths = |ticks: u32| ticks * INSTRUCTIONS_PER_TICK * 10 / calls.max(1) as u32;
         let gross = tenths(t.ticks.saturating_sub(baseline.ticks));
         let net = tenths(t.ticks.saturating_sub(empty.ticks));
@@ -235,31 +227,16 @@ mod firmware {
         d.dx
     }
 
-    /// Ticks of `kernel` called over `drives` from a rested state.
-    fn over_drives<T: Real, E: Effect<T>, R>(
-        e: &E,
-        drives: &[Drive<T>],
-        kernel: fn(&E, &mut E::State, &Drive<T>) -> R,
-    ) -> Span {
-        let mut s = e.rest(T::ZERO);
-        ticks(|| {
-            for d in drives {
-                black_box(kernel(e, &mut s, black_box(d)));
-            }
-        })
-    }
-
-    /// Prints the cost of `kernel` called on `e` over `drives`, net of
-    /// `empty` (a stand-in with the same arguments).
-    fn effect_cost<T: Real, E: Effect<T>, R, S>(
+    /// Prints the cost of `kernel` called on `e` over `drives` from a
+    /// rested state, net of `empty` (a stand-in with the same signature).
+    fn effect_cost<T: Real, E: Effect<T>, R>(
         (family, name, n): (&str, &str, usize),
         e: &E,
         run: &Run<'_, T>,
         kernel: fn(&E, &mut E::State, &Drive<T>) -> R,
-        empty: fn(&E, &mut E::State, &Drive<T>) -> S,
+        empty: fn(&E, &mut E::State, &Drive<T>) -> R,
     ) {
-        let t = over_drives(e, run.drives, kernel);
-        let empty = over_drives(e, run.drives, empty);
+        let spans = measure_three(e, || e.rest(T::ZERO), run.drives, kernel, empty);
         let line = Line {
             number: number_name::<T>(),
             input: run.input,
@@ -270,7 +247,7 @@ mod firmware {
             params_bytes: size_of_val(e),
             function: kernel as usize,
         };
-        report(&line, t, empty, run.baseline, run.drives.len());
+        report(&line, spans, run.drives.len());
     }
 
     /// Cost of one `Effect::step_force` of `e` over `drives` (the state
@@ -296,9 +273,9 @@ mod firmware {
     fn bushing_step<T: Real, B: Backbone<T>, E: Effect<T>>(
         b: &Bushing<T, B, E>,
         s: &mut BushingState<T, E::State>,
-        x: T,
+        x: &T,
     ) -> [T; 3] {
-        let o = b.step(s, x);
+        let o = b.step(s, *x);
         [o.force, o.tangent, o.dissipated]
     }
 
@@ -307,9 +284,9 @@ mod firmware {
     fn bushing_empty<T: Real, B: Backbone<T>, E: Effect<T>>(
         _: &Bushing<T, B, E>,
         _: &mut BushingState<T, E::State>,
-        x: T,
+        x: &T,
     ) -> [T; 3] {
-        [x, x, x]
+        [*x, *x, *x]
     }
 
     /// Cost of one `Bushing::step` of `b` over `xs` (force, tangent and
@@ -321,18 +298,9 @@ mod firmware {
     ) {
         let xs = input.xs;
         type Kernel<T, B, E> =
-            fn(&Bushing<T, B, E>, &mut BushingState<T, <E as Effect<T>>::State>, T) -> [T; 3];
-        let run = |kernel: Kernel<T, B, E>| {
-            let mut s = b.state_at(T::ZERO);
-            ticks(|| {
-                for x in xs {
-                    black_box(kernel(b, &mut s, *black_box(x)));
-                }
-            })
-        };
-        let t = run(bushing_step::<T, B, E>);
-        let empty = run(bushing_empty::<T, B, E>);
+            fn(&Bushing<T, B, E>, &mut BushingState<T, <E as Effect<T>>::State>, &T) -> [T; 3];
         let f: Kernel<T, B, E> = bushing_step::<T, B, E>;
+        let spans = measure_three(b, || b.state_at(T::ZERO), xs, f, bushing_empty::<T, B, E>);
         let line = Line {
             number: number_name::<T>(),
             input: input.input,
@@ -343,7 +311,7 @@ mod firmware {
             params_bytes: size_of_val(b),
             function: f as usize,
         };
-        report(&line, t, empty, input.xs_baseline, xs.len());
+        report(&line, spans, xs.len());
     }
 
     /// The number type as the report names it: Q16 (I16F16) is `fixed`.
@@ -357,16 +325,26 @@ mod firmware {
     /// Every Maxwell form with `N` cells and storage `A` (named `storage`).
     fn maxwell<T: Real, const N: usize, A: Accumulator<T>>(storage: &str, run: &Run<'_, T>) {
         for form in MaxwellForm::ALL {
-            let Ok(bank) = maxwell_bank::<T, N, A>(form) else {
-                fail()
-            };
-            let mut name = heapless_name();
-            name.push(form.name());
-            name.push("/");
-            name.push(storage);
-            effect(("maxwell", name.as_str(), N), &bank, run);
-            force_only(("maxwell-force", name.as_str(), N), &bank, run);
+            maxwell_form::<T, N, A>(form, storage, run);
         }
+    }
+
+    /// One Maxwell form with `N` cells and storage `A`: the whole step and
+    /// the force alone.
+    fn maxwell_form<T: Real, const N: usize, A: Accumulator<T>>(
+        form: MaxwellForm,
+        storage: &str,
+        run: &Run<'_, T>,
+    ) {
+        let Ok(bank) = maxwell_bank::<T, N, A>(form) else {
+            fail()
+        };
+        let mut name = heapless_name();
+        name.push(form.name());
+        name.push("/");
+        name.push(storage);
+        effect(("maxwell", name.as_str(), N), &bank, run);
+        force_only(("maxwell-force", name.as_str(), N), &bank, run);
     }
 
     /// Maxwell banks of 1 to 16 cells in every storage.
@@ -466,21 +444,13 @@ mod firmware {
             let Some([n1, n2]) = motion.first() else {
                 fail()
             };
-            let run = |kernel: fn(&Mount, &mut MountState, &[Pose<f32>; 2]) -> Loads<f32>| {
-                let mut s = b.state_at(n1, n2);
-                ticks(|| {
-                    for nodes in motion {
-                        black_box(kernel(&b, &mut s, black_box(nodes)));
-                    }
-                })
-            };
-            let t = run(six_dof_step);
-            let empty = run(six_dof_empty);
-            let baseline = ticks(|| {
-                for nodes in motion {
-                    black_box(black_box(nodes));
-                }
-            });
+            let spans = measure_three(
+                &b,
+                || b.state_at(n1, n2),
+                motion,
+                six_dof_step,
+                six_dof_empty,
+            );
             let line = Line {
                 number: "f32",
                 input: input.name(),
@@ -491,7 +461,7 @@ mod firmware {
                 params_bytes: size_of_val(&b),
                 function: six_dof_step as *const () as usize,
             };
-            report(&line, t, empty, baseline, N);
+            report(&line, spans, N);
         }
     }
 
@@ -501,26 +471,29 @@ mod firmware {
     }
 
     type TrackerState<const N: usize> = bushing::tracker::ModalState<f32, N>;
-    type TrackerStep<const N: usize> =
-        fn(&ModalTracker<f32, N>, &mut TrackerState<N>, &[f32]) -> ModalReport;
+    type TrackerStep<const N: usize, const S: usize> =
+        fn(&ModalTracker<f32, N>, &mut TrackerState<N>, &[f32; S]) -> ModalReport;
 
     #[inline(never)]
-    fn tracker_step<const N: usize>(
+    fn tracker_step<const N: usize, const S: usize>(
         t: &ModalTracker<f32, N>,
         s: &mut TrackerState<N>,
-        y: &[f32],
+        y: &[f32; S],
     ) -> ModalReport {
         t.step(s, y)
     }
 
     /// The stand-in for [`tracker_step`].
     #[inline(never)]
-    fn tracker_empty<const N: usize>(
+    fn tracker_empty<const N: usize, const S: usize>(
         _: &ModalTracker<f32, N>,
         _: &mut TrackerState<N>,
-        y: &[f32],
-    ) -> f32 {
-        y.first().copied().unwrap_or(0.0)
+        y: &[f32; S],
+    ) -> ModalReport {
+        ModalReport {
+            accepted: u8::from(y.first().is_some_and(|x| *x > 0.0)),
+            ..ModalReport::default()
+        }
     }
 
     /// One tracker update (predict, then every sensor's scalar update) on a
@@ -550,26 +523,19 @@ mod firmware {
         // mode), or band-limited noise; times mode-shape-like factors.
         for input in Input::ALL {
             let xs = input.signal(1.0, 50);
-            let run = |kernel: &mut dyn FnMut(&mut TrackerState<N>, &[f32; S])| {
-                let mut state = tracker.start();
-                ticks(|| {
-                    for &x in &xs {
-                        let shape = [1.0f32, 2.0, -1.8];
-                        let samples: [f32; S] = core::array::from_fn(|i| x * shape[i % 3]);
-                        kernel(&mut state, &samples);
-                    }
-                })
-            };
-            let t = run(&mut |state, y| {
-                black_box(tracker_step(&tracker, state, y));
+            let shape = [1.0f32, 2.0, -1.8];
+            let samples: [[f32; S]; STEPS] = core::array::from_fn(|k| {
+                let x = xs.get(k).copied().unwrap_or(0.0);
+                core::array::from_fn(|i| x * shape[i % 3])
             });
-            let empty = run(&mut |state, y| {
-                black_box(tracker_empty(&tracker, state, y));
-            });
-            let baseline = run(&mut |_, y| {
-                black_box(y);
-            });
-            let f: TrackerStep<N> = tracker_step::<N>;
+            let f: TrackerStep<N, S> = tracker_step::<N, S>;
+            let spans = measure_three(
+                &tracker,
+                || tracker.start(),
+                &samples,
+                f,
+                tracker_empty::<N, S>,
+            );
             let line = Line {
                 number: "f32",
                 input: input.name(),
@@ -580,17 +546,38 @@ mod firmware {
                 params_bytes: size_of_val(&tracker),
                 function: f as usize,
             };
-            report(&line, t, empty, baseline, STEPS);
+            report(&line, spans, STEPS);
         }
     }
+
+    type OscillatorStateOf = OscillatorState<f32, <(IwanBank<f32, 20>,) as Effect<f32>>::State>;
 
     #[inline(never)]
     fn oscillator_step(
         o: &IwanOscillator,
-        s: &mut OscillatorState<f32, <(IwanBank<f32, 20>,) as Effect<f32>>::State>,
-        f: f32,
+        s: &mut OscillatorStateOf,
+        f: &f32,
     ) -> OscillatorStep<f32> {
-        o.step(s, f)
+        o.step(s, *f)
+    }
+
+    /// The stand-in for [`oscillator_step`].
+    #[inline(never)]
+    fn oscillator_empty(
+        _: &IwanOscillator,
+        _: &mut OscillatorStateOf,
+        f: &f32,
+    ) -> OscillatorStep<f32> {
+        OscillatorStep {
+            p: *f,
+            v: *f,
+            a: *f,
+            force: *f,
+            dissipated: *f,
+            work: *f,
+            iterations: 0,
+            converged: true,
+        }
     }
 
     /// The reference Iwan oscillator of seed 004 from rest under a force:
@@ -601,45 +588,65 @@ mod firmware {
         let Ok(osc) = iwan_oscillator() else { fail() };
         for input in Input::ALL {
             let fs = input.signal(9.0, PERIOD);
-            let mut s = osc.state_at(0.0, 0.0, 0.0);
-            let t = ticks(|| {
-                for f in &fs {
-                    black_box(oscillator_step(&osc, &mut s, *black_box(f)));
-                }
-            });
-            let baseline = ticks(|| {
-                for f in &fs {
-                    black_box(*black_box(f));
-                }
-            });
+            let rest = || osc.state_at(0.0, 0.0, 0.0);
+            let spans = measure_three(&osc, rest, &fs, oscillator_step, oscillator_empty);
             let line = Line {
                 number: "f32",
                 input: input.name(),
                 family: "oscillator",
                 name: "iwan-20/newmark",
                 n: 20,
-                state_bytes: size_of_val(&s),
+                state_bytes: size_of_val(&rest()),
                 params_bytes: size_of_val(&osc),
                 function: oscillator_step as *const () as usize,
             };
-            report(&line, t, baseline, baseline, STEPS);
+            report(&line, spans, STEPS);
         }
     }
 
+    /// One sample of the sine tracker: the displacement (the force of
+    /// the pair is the modulus tracker's).
     #[inline(never)]
-    fn sine_step(t: &SineTracker<f32>, s: &mut SineState<f32>, y: f32) -> Result<f32, Refused> {
+    fn sine_step(
+        t: &SineTracker<f32>,
+        s: &mut SineState<f32>,
+        &(y, _): &(f32, f32),
+    ) -> Result<f32, Refused> {
         t.step(s, y)
     }
 
+    /// The stand-in for [`sine_step`].
+    #[inline(never)]
+    fn sine_empty(
+        _: &SineTracker<f32>,
+        _: &mut SineState<f32>,
+        &(y, _): &(f32, f32),
+    ) -> Result<f32, Refused> {
+        Ok(y)
+    }
+
+    /// One displacement and force sample of the modulus tracker, and K*.
     #[inline(never)]
     fn modulus_step(
         t: &ModulusTracker<f32>,
         s: &mut ModulusState<f32>,
-        x: f32,
-        f: f32,
+        &(x, f): &(f32, f32),
     ) -> Option<Modulus<f32>> {
         let _ = t.step(s, x, f);
         t.modulus(s)
+    }
+
+    /// The stand-in for [`modulus_step`].
+    #[inline(never)]
+    fn modulus_empty(
+        _: &ModulusTracker<f32>,
+        _: &mut ModulusState<f32>,
+        &(x, f): &(f32, f32),
+    ) -> Option<Modulus<f32>> {
+        Some(Modulus {
+            storage: x,
+            loss: f,
+        })
     }
 
     /// The sine tracker and the modulus tracker (x and F, K* on every
@@ -672,72 +679,61 @@ mod firmware {
         // force 0.9 x less 0.2 of the previous x.
         for input in Input::ALL {
             let xs = input.signal(1.0, 50);
-            let signal = |kernel: &mut dyn FnMut(f32, f32)| {
-                ticks(|| {
-                    let mut previous = 0.0f32;
-                    for &x in &xs {
-                        kernel(x, previous);
-                        previous = x;
-                    }
-                })
-            };
-            let baseline = signal(&mut |x, previous| {
-                black_box((x, previous));
+            let pairs: [(f32, f32); STEPS] = core::array::from_fn(|k| {
+                let x = xs.get(k).copied().unwrap_or(0.0);
+                let previous = k.checked_sub(1).and_then(|j| xs.get(j)).copied();
+                (x, 0.9 * x - 0.2 * previous.unwrap_or(0.0))
             });
-            let mut state = tracker.start();
-            let t = signal(&mut |x, _| {
-                let _ = black_box(sine_step(&tracker, &mut state, x));
-            });
+            let spans = measure_three(&tracker, || tracker.start(), &pairs, sine_step, sine_empty);
             let line = Line {
                 number: "f32",
                 input: input.name(),
                 family: "sine-tracker",
                 name: "sine/2-states",
                 n: 2,
-                state_bytes: size_of_val(&state),
+                state_bytes: size_of_val(&tracker.start()),
                 params_bytes: size_of_val(&tracker),
                 function: sine_step as *const () as usize,
             };
-            report(&line, t, baseline, baseline, STEPS);
-            let mut state = modulus.start();
-            let t = signal(&mut |x, previous| {
-                black_box(modulus_step(
-                    &modulus,
-                    &mut state,
-                    x,
-                    0.9 * x - 0.2 * previous,
-                ));
-            });
+            report(&line, spans, STEPS);
+            let spans = measure_three(
+                &modulus,
+                || modulus.start(),
+                &pairs,
+                modulus_step,
+                modulus_empty,
+            );
             let line = Line {
                 number: "f32",
                 input: input.name(),
                 family: "sine-tracker",
                 name: "modulus/x-and-f",
                 n: 4,
-                state_bytes: size_of_val(&state),
+                state_bytes: size_of_val(&modulus.start()),
                 params_bytes: size_of_val(&modulus),
                 function: modulus_step as *const () as usize,
             };
-            report(&line, t, baseline, baseline, STEPS);
+            report(&line, spans, STEPS);
         }
     }
 
     type Bank8 = MaxwellBank<f32, 8, Plain<f32>>;
 
-    /// A per-call kernel taking a temperature-like scalar.
-    type Call<S> = fn(&mut S, f32) -> bool;
+    /// A per-call kernel taking a temperature-like scalar, its subject
+    /// (a bank, a shift factor) as its state.
+    type Call<S> = fn(&(), &mut S, &f32) -> bool;
 
     /// Re-tunes a running bank in place in f32 (16 exponentials by `E`).
     #[inline(never)]
-    fn retune<E: Exponentials<f32>>(bank: &mut Bank8, a_t: f32) -> bool {
-        bank.retune::<E>(a_t).is_ok()
+    fn retune<E: Exponentials<f32>>(_: &(), bank: &mut Bank8, a_t: &f32) -> bool {
+        bank.retune::<E>(*a_t).is_ok()
     }
 
     /// Re-tunes by rebuilding the cells from their specifications in f64
     /// (software double precision on these cores).
     #[inline(never)]
-    fn retune_f64(bank: &mut Bank8, a_t: f32) -> bool {
-        match bank.shifted(f64::from(a_t)) {
+    fn retune_f64(_: &(), bank: &mut Bank8, a_t: &f32) -> bool {
+        match bank.shifted(f64::from(*a_t)) {
             Ok(b) => {
                 *bank = b;
                 true
@@ -748,40 +744,35 @@ mod firmware {
 
     /// The WLF shift factor `a_T` at a temperature, in f64.
     #[inline(never)]
-    fn wlf_f64(wlf: &mut ShiftFactor, t: f32) -> bool {
-        black_box(wlf.at(f64::from(t))).is_ok()
+    fn wlf_f64(_: &(), wlf: &mut ShiftFactor, t: &f32) -> bool {
+        black_box(wlf.at(f64::from(*t))).is_ok()
     }
 
     /// The WLF shift factor `a_T` at a temperature, in f32 by `E`.
     #[inline(never)]
-    fn wlf_f32<E: Exponentials<f32>>(wlf: &mut ShiftFactor, t: f32) -> bool {
-        black_box(wlf.at_in::<f32, E>(t)).is_ok()
+    fn wlf_f32<E: Exponentials<f32>>(_: &(), wlf: &mut ShiftFactor, t: &f32) -> bool {
+        black_box(wlf.at_in::<f32, E>(*t)).is_ok()
     }
 
     /// The stand-in for the calls above.
     #[inline(never)]
-    fn call_empty<S>(_: &mut S, x: f32) -> bool {
-        x > 0.0
+    fn call_empty<S>(_: &(), _: &mut S, x: &f32) -> bool {
+        *x > 0.0
     }
 
-    /// Cost of `kernel` called with 1.0, 1.01, 1.02, ... plus `offset`.
-    fn call_cost<S>(
+    /// Calls of a [`Call`]: a tenth of the signal kernels' (each is dear).
+    const CALLS: usize = STEPS / 10;
+
+    /// Cost of `kernel` called with 1.0, 1.01, 1.02, ... plus `offset`, on
+    /// a copy of `subject`.
+    fn call_cost<S: Clone>(
         (family, name, n): (&str, &str, usize),
-        subject: &mut S,
+        subject: &S,
         offset: f32,
         kernel: Call<S>,
     ) {
-        let calls = STEPS / 10;
-        let mut run = |kernel: Call<S>| {
-            ticks(|| {
-                for k in 0..calls {
-                    let x = offset + 1.0 + black_box(k as f32) * 1e-2;
-                    black_box(kernel(subject, x));
-                }
-            })
-        };
-        let t = run(kernel);
-        let empty = run(call_empty::<S>);
+        let xs: [f32; CALLS] = core::array::from_fn(|k| offset + 1.0 + k as f32 * 1e-2);
+        let spans = measure_three(&(), || subject.clone(), &xs, kernel, call_empty::<S>);
         let line = Line {
             number: "f32",
             input: OWN,
@@ -792,43 +783,44 @@ mod firmware {
             params_bytes: size_of_val(subject),
             function: kernel as usize,
         };
-        report(&line, t, empty, empty, calls);
+        report(&line, spans, CALLS);
     }
 
     /// Re-tuning 8 running Maxwell cells to a new temperature, and the WLF
     /// shift factor that gives it, by libm and micromath in f32 and in f64.
     fn temperature() {
-        let Ok(mut bank) = maxwell_bank::<f32, 8, Plain<f32>>(MaxwellForm::RateExactRamp) else {
+        let Ok(bank) = maxwell_bank::<f32, 8, Plain<f32>>(MaxwellForm::RateExactRamp) else {
             fail()
         };
         let f = ("retune", "retune-8/libm", 8);
-        call_cost(f, &mut bank, 0.0, retune::<LibmExp>);
+        call_cost(f, &bank, 0.0, retune::<LibmExp>);
         let f = ("retune", "retune-8/micromath", 8);
-        call_cost(f, &mut bank, 0.0, retune::<MicromathExp>);
+        call_cost(f, &bank, 0.0, retune::<MicromathExp>);
         let f = ("retune", "retune-8/f64", 8);
-        call_cost(f, &mut bank, 0.0, retune_f64);
-        let Ok(mut wlf) = ShiftFactor::wlf(17.44, 51.6, 20.0) else {
+        call_cost(f, &bank, 0.0, retune_f64);
+        let Ok(wlf) = ShiftFactor::wlf(17.44, 51.6, 20.0) else {
             fail()
         };
         // Temperatures from 20 degC up.
-        call_cost(
-            ("retune", "wlf/libm", 1),
-            &mut wlf,
-            19.0,
-            wlf_f32::<LibmExp>,
-        );
+        call_cost(("retune", "wlf/libm", 1), &wlf, 19.0, wlf_f32::<LibmExp>);
         call_cost(
             ("retune", "wlf/micromath", 1),
-            &mut wlf,
+            &wlf,
             19.0,
             wlf_f32::<MicromathExp>,
         );
-        call_cost(("retune", "wlf/f64", 1), &mut wlf, 19.0, wlf_f64);
+        call_cost(("retune", "wlf/f64", 1), &wlf, 19.0, wlf_f64);
     }
 
     #[inline(never)]
-    fn fit(record: &[f64; 50], out: &mut [SensorFit; 1]) -> u32 {
+    fn fit(record: &[f64; 50], out: &mut [SensorFit; 1], _: &()) -> u32 {
         fit_first_period(1e-3, &[record], out).map_or(0, |f| f.iterations)
+    }
+
+    /// The stand-in for [`fit`].
+    #[inline(never)]
+    fn fit_empty(record: &[f64; 50], _: &mut [SensorFit; 1], _: &()) -> u32 {
+        u32::from(record.first().is_some_and(|x| *x > 0.0))
     }
 
     /// Start values of the modal tracker: the least-squares fit of one
@@ -845,13 +837,9 @@ mod firmware {
             im = 0.999 * (s * re + c * im);
             re = r;
         }
-        let mut out = [SensorFit::default()];
-        let calls = 10;
-        let t = ticks(|| {
-            for _ in 0..calls {
-                black_box(fit(black_box(&record), &mut out));
-            }
-        });
+        let calls = [(); 10];
+        let fresh = || [SensorFit::default()];
+        let spans = measure_three(&record, fresh, &calls, fit, fit_empty);
         let line = Line {
             number: "f64",
             input: OWN,
@@ -862,7 +850,7 @@ mod firmware {
             params_bytes: size_of_val(&record),
             function: fit as *const () as usize,
         };
-        report(&line, t, Span::NONE, Span::NONE, calls);
+        report(&line, spans, calls.len());
     }
 
     /// A short fixed-capacity name.
@@ -967,6 +955,17 @@ mod firmware {
             NOISE_SEED
         );
 
+        // The modal tracker: one mode on one accelerometer (4 states), then
+        // two modes on three accelerometers (16 states).
+        let mode = ModeInit {
+            frequency: 20.0,
+            damping: 0.01,
+        };
+        if cfg!(feature = "headline-only") {
+            headline(mode);
+            probe::pass()
+        }
+
         in_type::<f32>();
         in_type::<f64>();
         in_type::<Q16>();
@@ -975,13 +974,6 @@ mod firmware {
         oscillator();
         six_dof();
         sine_trackers();
-
-        // The modal tracker: one mode on one accelerometer (4 states), then
-        // two modes on three accelerometers (16 states).
-        let mode = ModeInit {
-            frequency: 20.0,
-            damping: 0.01,
-        };
         let two = [
             mode,
             ModeInit {
@@ -998,6 +990,21 @@ mod firmware {
         first_period_fit();
         temperature();
         probe::pass()
+    }
+
+    /// The report's headline kernels alone, in f32: the whole binary of
+    /// the `headline-only` build.
+    fn headline(mode: ModeInit) {
+        let Ok(b) = default_bushing::<f32>() else {
+            fail()
+        };
+        on_every_input::<f32>(|run| {
+            maxwell_form::<f32, 8, Plain<f32>>(MaxwellForm::RateExactRamp, "plain", run);
+            iwan::<f32, 16>(run);
+            whole(("bushing", "default/spline+4maxwell+3jenkins", 7), &b, run);
+        });
+        tracker::<4, 1>("ekf/1-mode-1-acc", Filter::Ekf, &[mode]);
+        six_dof();
     }
 
     fn fail() -> ! {

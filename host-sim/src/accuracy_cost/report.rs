@@ -12,12 +12,14 @@ use super::{CSV_COLUMNS, Footprint, Goal, Key, Lines, Options, Row, rank_cost, r
 use crate::markdown::{Table, cell};
 
 mod measures;
-use measures::{builds_section, input_table, mca_table};
+use measures::{builds_section, harness_section, input_table, mca_table};
 
 /// How the report was made.
 pub(super) struct Context {
     /// The report's build against another, when one was given.
     pub builds: Option<super::builds::Comparison>,
+    /// The headline kernels in a binary of their own, when given.
+    pub spread: Option<super::builds::Spread>,
     /// The cycle model against llvm-mca, when it ran.
     pub mca: Option<Vec<super::mca::Check>>,
     pub options: Options,
@@ -604,10 +606,11 @@ pub(super) fn markdown(
          - **Error**: a fraction, shown in %, against a reference that is not the code under test\n  \
            (closed forms, or the same model in f64 at a 64 times finer step); each family says which.\n\
          - **M4F / M3 instr**: guest instructions per call on Cortex-M4F / Cortex-M3 (software\n  \
-           floating point) in QEMU with `-icount shift=0`, read from SysTick over 2000 calls, net of\n  \
-           the call when the firmware prints it (`net=`, what the kernel costs inlined in a control\n  \
-           loop), else with it (`per_call=`); exact counts from the instruction mix where one was\n  \
-           given, else read from SysTick (one tick per 40 instructions).\n\
+           floating point) in QEMU with `-icount shift=0`, over 2000 calls (200 for re-tuning, 10\n  \
+           for the fit), net of the call (`net=`: the kernel less a stand-in of the same signature\n  \
+           through the same harness, what the kernel costs inlined in a control loop; see\n  \
+           \"Harness\"); exact counts from the instruction mix where one was given, else read from\n  \
+           SysTick (one tick per 40 instructions).\n\
          - **M4F / M3 cycles**: estimated Cortex-M4 / Cortex-M3 cycles per call, net of the call: the\n  \
            instructions each measurement executed in QEMU (the `bushing-qemu-mix` plugin), each\n  \
            weighed by the timing tables of the core's Technical Reference Manual, with a result\n  \
@@ -787,6 +790,7 @@ pub(super) fn markdown(
         s.push_str(&table.finish());
     }
 
+    harness_section(&mut s, ctx.spread.as_ref());
     builds_section(&mut s, ctx.builds.as_ref());
     input_table(&mut s, by_input);
     mca_table(&mut s, ctx.mca.as_deref());

@@ -1,12 +1,68 @@
-//! The report's sections on how its costs are measured: the build flags
-//! (this build against another), each kernel's cost on every input, and
-//! the cycle model against llvm-mca.
+//! The report's sections on how its costs are measured: the harness (the
+//! same kernels in a binary of their own), the build flags (this build
+//! against another), each kernel's cost on every input, and the cycle model
+//! against llvm-mca.
 
 use std::fmt::Write;
 
 use super::cycles_instr;
 use crate::accuracy_cost::firmware::{InputCost, KernelLine};
 use crate::markdown::{Table, cell};
+
+/// The section of the measuring harness and its spread between binaries.
+pub(super) fn harness_section(
+    s: &mut String,
+    spread: Option<&crate::accuracy_cost::builds::Spread>,
+) {
+    let _ = writeln!(
+        s,
+        "\n## Harness\n\n\
+         Every kernel, whatever its shape, is measured by one harness \
+         (`bushing_boards::probe::measure`): a loop compiled once that calls the kernel through a \
+         trait object, in a window of its own; then a stand-in of the same signature (its result \
+         made from the input, nothing computed) through the same compiled call; then the idle \
+         loop. The kernel's figures are differences of windows: less the stand-in, what the kernel \
+         adds to a control loop; less the idle loop, the whole call. No loop is compiled around a \
+         particular kernel, so the compiler's choices there cannot move a kernel's count.\n\n\
+         To show that a kernel's count does not depend on what else its binary holds, the \
+         firmware is built a second time with the headline kernels alone \
+         (`--features headline-only`, the same flags) and measured the same way.\n"
+    );
+    let Some(sp) = spread else {
+        let _ = writeln!(
+            s,
+            "Not compared in this run (`scripts/accuracy-cost.sh` builds and measures the \
+             headline-only binary)."
+        );
+        return;
+    };
+    let _ = writeln!(
+        s,
+        "Against the `{}` binary, over the {} M4F kernel and input pairs measured in both: the \
+         largest difference is {:.1} instructions and {:.1} estimated cycles per call.\n",
+        sp.other,
+        sp.rows.len(),
+        sp.max_instructions(),
+        sp.max_cycles()
+    );
+    let mut table = Table::new([
+        "kernel",
+        "n",
+        "input",
+        "cycles (instr), full binary",
+        "cycles (instr), headline alone",
+    ]);
+    for r in &sp.rows {
+        table.row([
+            format!("{}: {}", r.key.family, r.key.name),
+            r.key.n.to_string(),
+            r.input.clone(),
+            cycles_instr(r.ours.1, Some(r.ours.0), 1),
+            cycles_instr(r.other.1, Some(r.other.0), 1),
+        ]);
+    }
+    s.push_str(&table.finish());
+}
 
 /// The section of the build flags, chosen on estimated cycles.
 pub(super) fn builds_section(
