@@ -88,6 +88,7 @@ fn inputs() -> Inputs {
         peers: vec![("peers.txt".into(), PEERS.into())],
         llvm_mca: None,
         other_build: None,
+        headline_build: None,
     }
 }
 
@@ -356,6 +357,55 @@ fn another_build_is_compared_on_estimated_cycles() {
         md.lines().find(|l| l.starts_with("Against")).unwrap_or("")
     );
     assert!(quick().markdown.contains("Not compared in this run"));
+}
+
+#[test]
+fn the_harness_spread_between_two_binaries_is_stated() {
+    let mut i = inputs();
+    // The same kernel in a binary of its own: the same mix (spread 0),
+    // then a kernel window of 10 more instructions over 10 calls (the
+    // loop of 5 twice more): 1 more a call.
+    let alone = |mix: &str| accuracy_cost::OtherBuild {
+        name: "headline-only".into(),
+        kernels: ("alone.txt".into(), KERNELS_M4F.into()),
+        mix: accuracy_cost::MixInput {
+            triple: "thumbv7em-none-eabihf".into(),
+            source: "alone-mix.txt".into(),
+            mix: mix.into(),
+            disassembly: DISASSEMBLY_M4F.into(),
+        },
+    };
+    i.headline_build = Some(alone(MIX_M4F));
+    let report = accuracy_cost::generate(&i, &Options::quick()).expect("the generator runs");
+    let stated = |md: &str| {
+        md.lines()
+            .find(|l| l.starts_with("Against the `headline-only` binary"))
+            .unwrap_or("")
+            .to_string()
+    };
+    let line = stated(&report.markdown);
+    assert!(
+        line.contains("M4F kernel and input pairs measured in both")
+            && line.contains("largest difference is 0.0 instructions and 0.0 estimated cycles"),
+        "{line}"
+    );
+    let longer = MIX_M4F.replace(
+        "window 0 insns=50 blocks=1\ntb 0x00000100 0x00000110 5 10 9",
+        "window 0 insns=60 blocks=1\ntb 0x00000100 0x00000110 5 12 11",
+    );
+    assert_ne!(longer, MIX_M4F, "the sample's kernel window");
+    i.headline_build = Some(alone(&longer));
+    let report = accuracy_cost::generate(&i, &Options::quick()).expect("the generator runs");
+    let line = stated(&report.markdown);
+    assert!(
+        line.contains("largest difference is 1.0 instructions"),
+        "{line}"
+    );
+    assert!(
+        quick()
+            .markdown
+            .contains("Not compared in this run (`scripts/accuracy-cost.sh` builds")
+    );
 }
 
 #[test]
