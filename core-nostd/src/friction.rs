@@ -17,7 +17,7 @@
 
 use crate::bushing::{Drive, Effect, EffectOutput};
 use crate::error::{Param, ParamError, positive, scaled};
-use crate::real::Real;
+use crate::real::{Real, clamp};
 
 /// State shared by the single cells: last x and force (and, for Berg, the
 /// last turning point and direction).
@@ -169,20 +169,22 @@ fn whole_power(e: f64) -> Option<u8> {
 /// - **Update**: backward Euler in the travel ξ on w = s z (z seen in the
 ///   direction of motion), `w_n = w_{n-1} + ξ f(w_n)` with
 ///   `f(w) = A - (γ + β sign(w)) |w|^n` decreasing in w. The root lies
-///   between w_{n-1} and the ultimate value w_u = (A / (β + γ))^(1/n); it is
-///   found by Newton steps kept inside that bracket, its ends included
-///   (bisection when a step leaves it), at most 60 iterations, done when a
-///   Newton correction is within 1e-12 (1 + |w|) (4 ε (1 + |w|) in f32).
-///   Unconditionally stable:
+///   between w_{n-1} and the ultimate value w_u = (A / (β + γ))^(1/n). For
+///   n = 1 and n = 2 it is found in closed form (a division, or a square
+///   root and a division); otherwise by Newton steps kept inside that
+///   bracket, its ends included (bisection when a step leaves it), at most
+///   60 iterations, done when a Newton correction is within 1e-12 (1 + |w|)
+///   (4 ε (1 + |w|) in f32). Unconditionally stable:
 ///   w never leaves [min(w_{n-1}, w_u), max(w_{n-1}, w_u)], whatever ξ
 ///   and n.
 /// - **States**: F and x_{n-1}.
 /// - **Limits**: n > 0, A > 0, β > 0, -β < γ < β (the thesis's
 ///   constraints). First order in ξ: accuracy needs ξ ≪ w_u / A.
-/// - **Cost**: one `powf` per Newton iteration, none when n is a whole
-///   number up to 9 (n - 1 products instead); 2 iterations a step when
-///   n = 1 (f is linear on each side of 0: a Newton step, then its check),
-///   at most 3 for n = 1.5, 2 and 3 under a sine (the test
+/// - **Cost**: n = 1 and 2: no iteration, one evaluation of f and two
+///   divisions (n = 2: and a square root). Other n: one `powf` per Newton
+///   iteration, none when n is a whole number up to 9 (n - 1 products
+///   instead); 2.6 iterations a step on average for n = 1.5 and 3, 1.95
+///   for n = 8, under a sine in f64 (the test
 ///   `bouc_wen_takes_newton_steps_not_bisections`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BoucWen<T> {
@@ -282,7 +284,10 @@ impl<T: Real> BoucWen<T> {
         } else {
             (self.w_u, w0)
         };
-        let mut w = (w0 + xi * f0).max(lo).min(hi);
+        if let Some(k @ (0 | 1)) = self.whole_n_minus_1 {
+            return self.solve_exact(w0, xi, (lo, hi), k == 1);
+        }
+        let mut w = clamp(w0 + xi * f0, lo, hi);
         let mut slope_w = T::ZERO;
         let mut iterations = 0;
         while iterations < MAX_ITERATIONS {
@@ -304,7 +309,7 @@ impl<T: Real> BoucWen<T> {
             if step.abs() <= tol {
                 // Newton's own correction is below the tolerance: take it
                 // (kept in the bracket) without another evaluation.
-                w = next.max(lo).min(hi);
+                w = clamp(next, lo, hi);
                 break;
             }
             w = if next >= lo && next <= hi {
@@ -317,6 +322,33 @@ impl<T: Real> BoucWen<T> {
             }
         }
         (w, slope_w, iterations)
+    }
+
+    /// [`Self::solve`] for n = 1 (`squared` false) and n = 2, in closed
+    /// form. With b = w0 + ξ A, g(0) = -b and g increasing: the root has
+    /// the sign of b, and on that side f(w) = A - k w for n = 1, A - k w|w|
+    /// for n = 2, with k = β + γ (b >= 0) or β - γ (b < 0), both positive.
+    /// Then `w = b / (1 + ξ k)`, or `2 b / (1 + sqrt(1 + 4 ξ k |b|))`, the
+    /// root of `ξ k w|w| + w - b = 0` written without cancellation. One
+    /// evaluation of f, kept in the bracket against rounding.
+    #[inline(always)]
+    fn solve_exact(&self, w0: T, xi: T, (lo, hi): (T, T), squared: bool) -> (T, T, u32) {
+        let b = w0 + xi * self.a;
+        let k = if b < T::ZERO {
+            self.beta - self.gamma
+        } else {
+            self.beta + self.gamma
+        };
+        let w = if squared {
+            let q = xi * k * b.abs();
+            let q4 = (q + q) + (q + q);
+            (b + b) / (T::ONE + (T::ONE + q4).sqrt())
+        } else {
+            b / (T::ONE + xi * k)
+        };
+        let w = clamp(w, lo, hi);
+        let (f, df, _, _) = self.rate(w);
+        (w, f / (T::ONE - xi * df), 1)
     }
 
     /// One step of travel `xi` in direction `s`.
@@ -652,17 +684,19 @@ mod tests {
 
     #[test]
     fn bouc_wen_takes_newton_steps_not_bisections() {
-        // n = 1: f is linear on each side of 0, so the first Newton step is
-        // the root and the second confirms it. Measured: 2.0 (n = 1), 2.63
-        // (n = 2), 2.54 (n = 3), 2.59 (n = 1.5) a step in f64, at most 3;
-        // at most 1.90 and 2 in f32.
-        let (mean, worst, residual) = bouc_wen_iterations::<f64>(1.0);
-        assert!(
-            mean <= 2.0 && worst <= 2,
-            "n = 1: {mean} mean, {worst} worst"
-        );
-        assert!(residual < 1e-15, "{residual}");
-        for n in [2.0, 3.0, 1.5] {
+        // n = 1 and 2 are solved in closed form: one evaluation, and the
+        // residual of the backward-Euler equation at rounding level.
+        for n in [1.0, 2.0] {
+            let (mean, worst, residual) = bouc_wen_iterations::<f64>(n);
+            assert!(mean == 1.0 && worst == 1, "n = {n}: {mean} mean");
+            assert!(residual < 1e-15, "n = {n}: {residual}");
+            let (mean, worst, residual) = bouc_wen_iterations::<f32>(n);
+            assert!(mean == 1.0 && worst == 1, "f32, n = {n}: {mean} mean");
+            assert!(residual < 1e-7, "f32, n = {n}: {residual}");
+        }
+        // Other exponents by Newton. Measured: 2.54 (n = 3), 2.59
+        // (n = 1.5), 1.95 (n = 8) a step in f64; at most 1.90 in f32.
+        for n in [3.0, 1.5, 8.0] {
             let (mean, worst, residual) = bouc_wen_iterations::<f64>(n);
             assert!(
                 mean <= 3.0 && worst <= 4,
@@ -670,7 +704,7 @@ mod tests {
             );
             assert!(residual < 1e-15, "n = {n}: {residual}");
         }
-        for n in [1.0, 2.0, 3.0, 1.5] {
+        for n in [3.0, 1.5, 8.0] {
             let (mean, worst, residual) = bouc_wen_iterations::<f32>(n);
             assert!(
                 mean <= 2.5 && worst <= 3,
@@ -681,6 +715,35 @@ mod tests {
         assert_eq!(whole_power(2.0), Some(2));
         assert_eq!(whole_power(0.5), None);
         assert_eq!(whole_power(9.0), None);
+    }
+
+    #[test]
+    fn bouc_wen_closed_forms_find_newtons_root() {
+        // The same cell solved by Newton (the power through powf): the
+        // roots agree to the solver's tolerance, on both sides of 0 and
+        // for steps far beyond the cell's characteristic travel.
+        for n in [1.0, 2.0] {
+            let exact = BoucWen::<f64>::new(50.0, 1.0, 5.0, 2.0, n).unwrap();
+            let mut newton = exact;
+            newton.whole_n_minus_1 = None;
+            for w0 in [-0.6, -0.1, 0.0, 0.05, 0.4] {
+                for xi in [1e-6, 1e-3, 0.1, 10.0] {
+                    let (f0, ..) = exact.rate(w0);
+                    let (w, slope, _) = exact.solve(w0, xi, f0);
+                    let (w_n, slope_n, _) = newton.solve(w0, xi, f0);
+                    let tol = 1e-11 * (1.0 + w.abs());
+                    assert!((w - w_n).abs() <= tol, "n = {n}, {w0} {xi}: {w} {w_n}");
+                    // At w = 0 (here b = 0 exactly) f' has a kink for
+                    // n = 1: each solver reports a one-sided slope.
+                    if w.abs() > 1e-9 {
+                        assert!(
+                            (slope - slope_n).abs() <= 1e-9 * (1.0 + slope.abs()),
+                            "n = {n}, {w0} {xi}: {slope} {slope_n}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]

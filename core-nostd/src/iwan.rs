@@ -55,7 +55,7 @@
 
 use crate::bushing::{Drive, Effect, EffectOutput};
 use crate::error::{Param, ParamError, positive, scaled};
-use crate::real::Real;
+use crate::real::{Real, clamp};
 
 /// One Jenkins cell: load fraction and slip force.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,20 +97,6 @@ fn fraction_sum(specs: &[IwanCellSpec]) -> Result<f64, ParamError> {
         return Err(ParamError::FractionsAboveOne { sum });
     }
     Ok(sum)
-}
-
-/// `v` limited to `[lo, hi]` with plain compares: the inputs are finite
-/// (the bushing refuses others), so the NaN rules of `f32::max`/`min`,
-/// which cost extra branches on cores without `vmaxnm`, are not needed.
-#[inline(always)]
-fn clamp<T: Real>(v: T, lo: T, hi: T) -> T {
-    if v > hi {
-        hi
-    } else if v < lo {
-        lo
-    } else {
-        v
-    }
 }
 
 /// Coefficients of one clamp-form cell.

@@ -3,6 +3,20 @@
 use core::fmt::Debug;
 use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
 
+/// `v` limited to `[lo, hi]` with plain compares, for finite inputs (the
+/// models refuse others): the NaN rules of `f32::max`/`min`, a library call
+/// on cores without `vmaxnm`, are not needed.
+#[inline(always)]
+pub(crate) fn clamp<T: PartialOrd>(v: T, lo: T, hi: T) -> T {
+    if v > hi {
+        hi
+    } else if v < lo {
+        lo
+    } else {
+        v
+    }
+}
+
 /// A floating-point working type for the hot path: `f32` or `f64`.
 ///
 /// Models are generic over `Real`; every coefficient is computed in `f64` at
