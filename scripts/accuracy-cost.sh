@@ -97,15 +97,19 @@ headline=(--headline-kernels "$work/kernel-cost-headline.txt"
     --headline-mix "$work/mix-headline.txt" --headline-disassembly "$work/kernel-cost-headline.dis")
 
 peers=()
+peers_mix=()
 if grep -q 'kalman-peers' board-examples/Cargo.toml; then
     echo "==> kalman-peers on the host"
     cargo run -q --release -p bushing-boards --features peers --bin kalman-peers >"$work/kalman-peers-host.txt"
     peers+=("$work/kalman-peers-host.txt")
-    echo "==> kalman-peers on thumbv7em-none-eabihf (QEMU)"
-    cargo run -q --release -p bushing-boards --features peers --target thumbv7em-none-eabihf \
-        --bin kalman-peers \
-        >"$work/kalman-peers-m4f.txt"
+    echo "==> kalman-peers on thumbv7em-none-eabihf (QEMU, with the plugin)"
+    cargo build -q --release -p bushing-boards --features peers --target thumbv7em-none-eabihf \
+        --bin kalman-peers
+    cp "$target/thumbv7em-none-eabihf/release/kalman-peers" "$work/kalman-peers-m4f.elf"
+    measure "$work/kalman-peers-m4f.elf" "$work/kalman-peers-m4f.txt" "$work/mix-peers.txt" \
+        -machine mps2-an386 -cpu cortex-m4
     peers+=("$work/kalman-peers-m4f.txt")
+    peers_mix=(--peers-mix "$work/mix-peers.txt" --peers-disassembly "$work/kalman-peers-m4f.dis")
 else
     echo "==> no kalman-peers binary yet: the peer table says so"
 fi
@@ -141,6 +145,6 @@ args=(accuracy-cost ${mode[@]+"${mode[@]}"} --kernels "${kernels[@]}" --elf "${e
     --mix "${mixes[@]}" --disassembly "${disassemblies[@]}" ${mca[@]+"${mca[@]}"}
     ${other[@]+"${other[@]}"} "${headline[@]}")
 if [ ${#peers[@]} -gt 0 ]; then
-    args+=(--peers "${peers[@]}")
+    args+=(--peers "${peers[@]}" ${peers_mix[@]+"${peers_mix[@]}"})
 fi
 cargo run -q --release -p bushing-sim -- "${args[@]}" --out "$out"

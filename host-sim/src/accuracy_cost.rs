@@ -303,6 +303,10 @@ pub struct Inputs {
     pub elfs: Vec<(String, Vec<u8>)>,
     /// `(source name, text)` of `kalman-peers` outputs.
     pub peers: Vec<(String, String)>,
+    /// The instruction mix and disassembly of the Cortex-M4F
+    /// `kalman-peers` run: exact counts and estimated cycles for its lines
+    /// (those in instructions, with windows).
+    pub peers_mix: Option<MixInput>,
     /// The executed-instruction mixes of the `kernel-cost` runs.
     pub mixes: Vec<MixInput>,
     /// `llvm-mca`, for the cross-check of the cycle model ([`mca`]); none:
@@ -628,6 +632,12 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
     for (source, text) in &inputs.peers {
         peers.extend(firmware::parse_peers(source, text)?);
     }
+    if let Some(m) = &inputs.peers_mix {
+        let mix = cycles::Mix::parse(&m.source, &m.mix)?;
+        let dis = cycles::Disassembly::parse(&m.disassembly);
+        let on_target = peers.iter_mut().filter(|p| p.unit == "instructions");
+        cycles::attach_peers(on_target, &mix, &dis)?;
+    }
 
     let warnings = elf_mismatches(&lines, &elfs);
     let mut rows = families::rows(options)?;
@@ -808,6 +818,9 @@ pub struct Command {
     pub elf: Vec<(String, PathBuf)>,
     /// `--peers FILE...`: outputs of `kalman-peers`.
     pub peers: Vec<PathBuf>,
+    /// `--peers-mix FILE --peers-disassembly FILE`: the instruction mix of
+    /// the Cortex-M4F `kalman-peers` run and the disassembly of its ELF.
+    pub peers_mix: Option<(PathBuf, PathBuf)>,
     /// `--mix TRIPLE=PATH...`: executed-instruction mixes.
     pub mix: Vec<(String, PathBuf)>,
     /// `--disassembly TRIPLE=PATH...`: the disassembly of each ELF with a
@@ -886,6 +899,15 @@ impl Command {
             kernels: self.kernels.iter().map(text).collect::<Result<_, _>>()?,
             elfs,
             peers: self.peers.iter().map(text).collect::<Result<_, _>>()?,
+            peers_mix: match &self.peers_mix {
+                Some((mix, dis)) => Some(MixInput {
+                    triple: "thumbv7em-none-eabihf".into(),
+                    source: mix.display().to_string(),
+                    mix: text(mix)?.1,
+                    disassembly: text(dis)?.1,
+                }),
+                None => None,
+            },
             mixes,
             llvm_mca: self.llvm_mca.clone(),
             other_build: match &self.other_build {

@@ -290,6 +290,13 @@ pub struct AccuracyCostArgs {
     /// Outputs of `kalman-peers`.
     #[arg(long, num_args = 1.., value_name = "FILE")]
     peers: Vec<PathBuf>,
+    /// The instruction mix of the Cortex-M4F `kalman-peers` run (the
+    /// plugin's output): exact counts and estimated cycles for the peers.
+    #[arg(long, value_name = "FILE", requires = "peers_disassembly")]
+    peers_mix: Option<PathBuf>,
+    /// The disassembly of that run's ELF.
+    #[arg(long, value_name = "FILE", requires = "peers_mix")]
+    peers_disassembly: Option<PathBuf>,
     /// Executed-instruction mixes of the `kernel-cost` runs (the
     /// `bushing-qemu-mix` plugin's output), as TRIPLE=PATH: estimated
     /// cycles.
@@ -499,6 +506,7 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
                 kernels: a.kernels,
                 elf: a.elf,
                 peers: a.peers,
+                peers_mix: a.peers_mix.zip(a.peers_disassembly),
                 mix: a.mix,
                 disassembly: a.disassembly,
                 llvm_mca: a.llvm_mca,

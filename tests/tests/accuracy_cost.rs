@@ -86,6 +86,7 @@ fn inputs() -> Inputs {
         ],
         elfs: Vec::new(),
         peers: vec![("peers.txt".into(), PEERS.into())],
+        peers_mix: None,
         llvm_mca: None,
         other_build: None,
         headline_build: None,
@@ -406,6 +407,42 @@ fn the_harness_spread_between_two_binaries_is_stated() {
             .markdown
             .contains("Not compared in this run (`scripts/accuracy-cost.sh` builds")
     );
+}
+
+#[test]
+fn peers_measured_with_the_plugin_get_exact_counts_and_cycles() {
+    let mut i = inputs();
+    // A peer whose pass is window 0 of the sample mix and whose stand-in
+    // is window 1: (50 - 20) / 10 = 3 instructions and (128 - 40) / 10 =
+    // 8.8 estimated cycles an update, whatever its printed cost.
+    i.peers = vec![(
+        "peers-m4f.txt".into(),
+        "kalman name=peer-ekf crate=some-kalman@0.3.1 filter=ekf cost=40 unit=instructions \
+         freq_err_pct=0.004 damp_err_pts=0.003 amp_rms=0.02 calls=10 windows=0,1\n"
+            .into(),
+    )];
+    i.peers_mix = Some(accuracy_cost::MixInput {
+        triple: "thumbv7em-none-eabihf".into(),
+        source: "peers-mix.txt".into(),
+        mix: MIX_M4F.into(),
+        disassembly: DISASSEMBLY_M4F.into(),
+    });
+    let report = accuracy_cost::generate(&i, &Options::quick()).expect("the generator runs");
+    let row = report
+        .markdown
+        .lines()
+        .find(|l| l.starts_with("| peers-m4f.txt | peer-ekf"))
+        .unwrap_or("");
+    assert!(
+        row.contains("| 3.00 | instructions |") && row.contains("| 8.80 |"),
+        "{row}"
+    );
+    // A window the mix does not have is an error, not a silent figure.
+    i.peers[0].1 = i.peers[0].1.replace("windows=0,1", "windows=0,7");
+    let e = accuracy_cost::generate(&i, &Options::quick())
+        .map(|_| ())
+        .unwrap_err();
+    assert!(e.to_string().contains("peers-mix.txt"), "{e}");
 }
 
 #[test]

@@ -48,8 +48,12 @@
 //! samples, net of the same loop over an empty stand-in of the same
 //! signature. On the host: nanoseconds per update (`std::time::Instant`),
 //! the best of 5 runs. On Cortex-M4F under QEMU (`-icount shift=0`):
-//! guest instructions per update, from SysTick (one tick per 40
-//! instructions). Errors, from a second pass over the data: final
+//! guest instructions per update through the kernels' harness
+//! (`bushing_boards::probe::measure`), from SysTick (one tick per 40
+//! instructions), with the probe windows of the filter and its stand-in
+//! (`windows=`, `model_windows=`, and `calls=`) from which the report
+//! takes exact counts and estimated cycles when the run had the
+//! `bushing-qemu-mix` plugin. Errors, from a second pass over the data: final
 //! frequency error in %, final damping error in points of ξ (%), and
 //! `amp_rms`, the RMS of the estimated (from the state after each update)
 //! minus the clean acceleration over the second half, relative to the
@@ -58,6 +62,7 @@
 //! ```text
 //! kalman name=ours-ekf crate=bushing filter=ekf cost=... unit=ns freq_err_pct=... damp_err_pts=... amp_rms=...
 //! kalman name=minikalman crate=minikalman@0.8.1 filter=ekf cost=... unit=ns model=... freq_err_pct=... ...
+//! kalman name=minikalman ... unit=instructions model=... amp_rms=... calls=4000 windows=12,13 model_windows=0,1
 //! ```
 //!
 //! ```text
@@ -683,6 +688,7 @@ fn empty_update<F>(f: &mut F, y: f32) {
 }
 
 /// One pass of `update` over the samples.
+#[cfg(not(target_os = "none"))]
 fn pass<F>(f: &mut F, update: fn(&mut F, f32), ys: &[f32]) {
     for &y in ys {
         update(f, black_box(y));
@@ -690,27 +696,87 @@ fn pass<F>(f: &mut F, update: fn(&mut F, f32), ys: &[f32]) {
     black_box(f);
 }
 
-/// Host: nanoseconds for a pass from a fresh filter, the best of 5.
+/// Host: nanoseconds for a pass from a fresh filter, the best of 5 (no
+/// window).
 #[cfg(not(target_os = "none"))]
-fn elapsed<F>(make: &dyn Fn() -> F, update: fn(&mut F, f32), ys: &[f32]) -> f64 {
-    (0..5)
+fn elapsed<F>(make: &dyn Fn() -> F, update: fn(&mut F, f32), ys: &[f32]) -> (f64, Option<u32>) {
+    let best = (0..5)
         .map(|_| {
             let mut f = make();
             let t = std::time::Instant::now();
             pass(&mut f, update, ys);
             t.elapsed().as_nanos() as f64
         })
-        .fold(f64::INFINITY, f64::min)
+        .fold(f64::INFINITY, f64::min);
+    (best, None)
 }
 
-/// Target: guest instructions for a pass from a fresh filter, from
-/// SysTick (free running, counting down, one tick per 40 instructions
-/// under `-icount shift=0`).
+/// A filter's updates as the measuring harness calls them: the update is
+/// a field, so a filter and its stand-in share one compiled call.
 #[cfg(target_os = "none")]
-fn elapsed<F>(make: &dyn Fn() -> F, update: fn(&mut F, f32), ys: &[f32]) -> f64 {
-    use bushing_boards::probe::{INSTRUCTIONS_PER_TICK, ticks};
-    let mut f = make();
-    f64::from(ticks(|| pass(&mut f, update, ys)) * INSTRUCTIONS_PER_TICK)
+struct Updates<'a, F> {
+    f: F,
+    update: fn(&mut F, f32),
+    ys: &'a [f32],
+}
+
+#[cfg(target_os = "none")]
+impl<F> bushing_boards::probe::Kernel for Updates<'_, F> {
+    #[inline(never)]
+    fn call(&mut self, i: usize) {
+        if let Some(&y) = self.ys.get(i) {
+            (self.update)(&mut self.f, black_box(y));
+        }
+    }
+
+    fn calls(&self) -> usize {
+        self.ys.len()
+    }
+}
+
+/// Target: guest instructions for a pass from a fresh filter through the
+/// kernels' harness (`bushing_boards::probe::measure`), from SysTick
+/// (one tick per 40 instructions under `-icount shift=0`), and the
+/// pass's probe window, for the report's cycle estimate.
+#[cfg(target_os = "none")]
+fn elapsed<F>(make: &dyn Fn() -> F, update: fn(&mut F, f32), ys: &[f32]) -> (f64, Option<u32>) {
+    use bushing_boards::probe::{INSTRUCTIONS_PER_TICK, measure};
+    let span = measure(&mut Updates {
+        f: make(),
+        update,
+        ys,
+    });
+    (f64::from(span.ticks * INSTRUCTIONS_PER_TICK), span.window)
+}
+
+/// A filter's cost per update, net of the same pass over an empty
+/// stand-in, and on the target the two probe windows (filter, stand-in).
+struct Cost {
+    per_update: f64,
+    windows: Option<[u32; 2]>,
+}
+
+impl Cost {
+    fn of<F>(make: &dyn Fn() -> F, update: fn(&mut F, f32), ys: &[f32]) -> Self {
+        let busy = elapsed(make, update, ys);
+        let idle = elapsed(make, empty_update::<F>, ys);
+        Self {
+            per_update: (busy.0 - idle.0) / ys.len().max(1) as f64,
+            windows: busy.1.zip(idle.1).map(|(b, i)| [b, i]),
+        }
+    }
+}
+
+/// ` NAME=B,I` for a cost measured with windows, nothing otherwise.
+struct Windows(&'static str, Option<[u32; 2]>);
+
+impl fmt::Display for Windows {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.1 {
+            Some([b, i]) => write!(f, " {}={b},{i}", self.0),
+            None => Ok(()),
+        }
+    }
 }
 
 const UNIT: &str = if cfg!(target_os = "none") {
@@ -786,11 +852,9 @@ fn model_update(m: &mut ModelOnly, y: f32) {
 }
 
 /// Cost of a peer's model functions per update, net of the loop.
-fn model_cost(p: &Problem, rec: &Record) -> f64 {
+fn model_cost(p: &Problem, rec: &Record) -> Cost {
     let make = || ModelOnly { x: p.x0 };
-    let busy = elapsed(&make, model_update, &rec.noisy);
-    let idle = elapsed(&make, empty_update::<ModelOnly>, &rec.noisy);
-    (busy - idle) / SAMPLES as f64
+    Cost::of(&make, model_update, &rec.noisy)
 }
 
 /// Measures one filter and prints its line; `model` is the cost of the
@@ -805,26 +869,40 @@ fn compare<F: Estimate>(
     update: fn(&mut F, f32),
     rec: &Record,
     gain: f32,
-    model: Option<f64>,
+    model: Option<&Cost>,
 ) {
-    let busy = elapsed(make, update, &rec.noisy);
-    let idle = elapsed(make, empty_update::<F>, &rec.noisy);
-    let cost = (busy - idle) / SAMPLES as f64;
+    let cost = Cost::of(make, update, &rec.noisy);
     let e = errors(make(), update, rec, gain);
-    let model = model.map(|m| Num(m, 1));
+    let model_windows = model.and_then(|m| m.windows);
+    let model = model.map(|m| Num(m.per_update, 1));
     say!(
-        "kalman name={} crate={} filter={} cost={} unit={}{}{} freq_err_pct={} damp_err_pts={} amp_rms={}",
+        "kalman name={} crate={} filter={} cost={} unit={}{}{} freq_err_pct={} damp_err_pts={} amp_rms={}{}{}{}",
         name,
         krate,
         filter,
-        Num(cost, 1),
+        Num(cost.per_update, 1),
         UNIT,
         if model.is_some() { " model=" } else { "" },
         Maybe(model),
         Num(e.freq_pct, 6),
         Num(e.damp_pts, 6),
-        Num(e.amp_rms, 6)
+        Num(e.amp_rms, 6),
+        Calls(cost.windows.map(|_| rec.noisy.len())),
+        Windows("windows", cost.windows),
+        Windows("model_windows", model_windows)
     );
+}
+
+/// ` calls=N` where the cost has windows.
+struct Calls(Option<usize>);
+
+impl fmt::Display for Calls {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.0 {
+            Some(n) => write!(f, " calls={n}"),
+            None => Ok(()),
+        }
+    }
 }
 
 /// An optional number: nothing when absent.
@@ -860,7 +938,7 @@ fn run() -> Result<(), ParamError> {
         "# ours: default Tuning (a mode below fade_snr = 3 noise deviations fades: amplitudes kept loose, here after ~2.8 s); -nofade: fade_snr = 0, the peers' plain EKF"
     );
     let g = p.gain;
-    let model = Some(model_cost(&p, &rec));
+    let model = model_cost(&p, &rec);
     compare(
         "ours-ekf",
         "bushing",
@@ -909,7 +987,7 @@ fn run() -> Result<(), ParamError> {
         mk::minikalman_update,
         &rec,
         g,
-        model,
+        Some(&model),
     );
     compare(
         "kfilter",
@@ -919,7 +997,7 @@ fn run() -> Result<(), ParamError> {
         kf::kfilter_update,
         &rec,
         g,
-        model,
+        Some(&model),
     );
     compare(
         "adskalman",
@@ -929,7 +1007,7 @@ fn run() -> Result<(), ParamError> {
         ads::adskalman_update,
         &rec,
         g,
-        model,
+        Some(&model),
     );
     Ok(())
 }

@@ -37,7 +37,7 @@
 
 use std::collections::BTreeMap;
 
-use super::firmware::KernelLine;
+use super::firmware::{KernelLine, PeerLine};
 
 /// The pipeline refill of a taken branch, in cycles (the middle of the
 /// TRM's 1 to 3).
@@ -94,8 +94,13 @@ pub enum Error {
         found: u64,
     },
     /// A window number the mix does not have.
-    #[error("no window {0} in the mix")]
-    NoWindow(u32),
+    #[error("no window {window} in the mix {source_name}")]
+    NoWindow {
+        /// The window asked for.
+        window: u32,
+        /// The mix, as named to [`Mix::parse`].
+        source_name: String,
+    },
 }
 
 /// One translation block's counts in a window.
@@ -127,6 +132,8 @@ pub struct Window {
 pub struct Mix {
     /// Windows by number.
     pub windows: Vec<Window>,
+    /// The mix's name, for errors.
+    pub source_name: String,
 }
 
 fn hex(word: &str) -> Option<u64> {
@@ -205,12 +212,18 @@ impl Mix {
         if !ended {
             return Err(Error::Unfinished(source_name.into()));
         }
-        Ok(Self { windows })
+        Ok(Self {
+            windows,
+            source_name: source_name.into(),
+        })
     }
 
     /// Window `n`.
     pub fn window(&self, n: u32) -> Result<&Window, Error> {
-        self.windows.get(n as usize).ok_or(Error::NoWindow(n))
+        self.windows.get(n as usize).ok_or_else(|| Error::NoWindow {
+            window: n,
+            source_name: self.source_name.clone(),
+        })
     }
 }
 
@@ -641,22 +654,7 @@ pub fn attach(
     let Some(core) = Core::of_target(target) else {
         return Ok(());
     };
-    let mut memo: BTreeMap<u32, (f64, f64)> = BTreeMap::new();
-    let mut measure = |w: Option<u32>| -> Result<(f64, f64), Error> {
-        let Some(w) = w else {
-            return Ok((0.0, 0.0));
-        };
-        if let Some(v) = memo.get(&w) {
-            return Ok(*v);
-        }
-        let window = mix.window(w)?;
-        let v = (
-            disassembly.window_cycles(core, window)? as f64,
-            window.insns as f64,
-        );
-        memo.insert(w, v);
-        Ok(v)
-    };
+    let mut windows = Windows::new(core, mix, disassembly);
     for line in lines.iter_mut().filter(|l| l.target == target) {
         let (Some([t, e, b]), Some(calls)) = (line.windows, line.calls) else {
             continue;
@@ -664,19 +662,86 @@ pub fn attach(
         if t.is_none() || calls == 0 {
             continue;
         }
-        let calls = calls as f64;
-        let (t, e, b) = (measure(t)?, measure(e)?, measure(b)?);
-        // Per call to a tenth, as the firmware prints its SysTick figures:
-        // below that is the windows' one-time difference (the loop's
-        // set-up around a kernel and around its stand-in differ by a few
-        // instructions over thousands of calls).
-        let per = |x: f64, y: f64| (((x - y) / calls).max(0.0) * 10.0).round() / 10.0;
-        line.cycles = Some(per(t.0, e.0));
-        line.cycles_call = Some(per(t.0, b.0));
-        line.net = Some(per(t.1, e.1));
-        line.per_call = per(t.1, b.1);
+        let (t, e, b) = (windows.get(t)?, windows.get(e)?, windows.get(b)?);
+        line.cycles = Some(per_call(t.0, e.0, calls));
+        line.cycles_call = Some(per_call(t.0, b.0, calls));
+        line.net = Some(per_call(t.1, e.1, calls));
+        line.per_call = per_call(t.1, b.1, calls);
     }
     Ok(())
+}
+
+/// Joins the mix of the Cortex-M4F `kalman-peers` run into its lines: each
+/// line with windows and a call count gets its exact instructions
+/// ([`PeerLine::cost`], [`PeerLine::model`]) and estimated cycles per
+/// update ([`PeerLine::cycles`], [`PeerLine::model_cycles`]), each net of
+/// its stand-in.
+pub fn attach_peers<'l>(
+    lines: impl Iterator<Item = &'l mut PeerLine>,
+    mix: &Mix,
+    disassembly: &Disassembly,
+) -> Result<(), Error> {
+    let mut windows = Windows::new(Core::M4, mix, disassembly);
+    for line in lines {
+        let Some(calls) = line.calls.filter(|&c| c > 0) else {
+            continue;
+        };
+        if let Some([b, i]) = line.windows {
+            let (b, i) = (windows.get(Some(b))?, windows.get(Some(i))?);
+            line.cycles = Some(per_call(b.0, i.0, calls));
+            line.cost = per_call(b.1, i.1, calls);
+        }
+        if let Some([b, i]) = line.model_windows {
+            let (b, i) = (windows.get(Some(b))?, windows.get(Some(i))?);
+            line.model_cycles = Some(per_call(b.0, i.0, calls));
+            line.model = Some(per_call(b.1, i.1, calls));
+        }
+    }
+    Ok(())
+}
+
+/// Per call to a tenth, as the firmware prints its SysTick figures: below
+/// that is the windows' one-time difference (the set-up around a kernel
+/// and around its stand-in differ by a few instructions over thousands of
+/// calls).
+fn per_call(x: f64, y: f64, calls: u64) -> f64 {
+    (((x - y) / calls as f64).max(0.0) * 10.0).round() / 10.0
+}
+
+/// (estimated cycles, instructions) of a mix's windows, each computed once.
+struct Windows<'a> {
+    core: Core,
+    mix: &'a Mix,
+    disassembly: &'a Disassembly,
+    memo: BTreeMap<u32, (f64, f64)>,
+}
+
+impl<'a> Windows<'a> {
+    fn new(core: Core, mix: &'a Mix, disassembly: &'a Disassembly) -> Self {
+        Self {
+            core,
+            mix,
+            disassembly,
+            memo: BTreeMap::new(),
+        }
+    }
+
+    /// Window `w`'s totals; none: zero.
+    fn get(&mut self, w: Option<u32>) -> Result<(f64, f64), Error> {
+        let Some(w) = w else {
+            return Ok((0.0, 0.0));
+        };
+        if let Some(v) = self.memo.get(&w) {
+            return Ok(*v);
+        }
+        let window = self.mix.window(w)?;
+        let v = (
+            self.disassembly.window_cycles(self.core, window)? as f64,
+            window.insns as f64,
+        );
+        self.memo.insert(w, v);
+        Ok(v)
+    }
 }
 
 #[cfg(test)]
@@ -871,7 +936,10 @@ mod tests {
         let mix = Mix::parse("m", good).unwrap_or_default();
         assert_eq!(mix.windows.len(), 1);
         assert_eq!(mix.window(0).map(|w| w.insns), Ok(3));
-        assert_eq!(mix.window(1), Err(Error::NoWindow(1)));
+        assert!(matches!(
+            mix.window(1),
+            Err(Error::NoWindow { window: 1, ref source_name }) if source_name == "m"
+        ));
         let cut = good.replace("end windows=1\n", "");
         assert_eq!(Mix::parse("m", &cut), Err(Error::Unfinished("m".into())));
         let bad = good.replace("3 1 1", "3 1 2");

@@ -193,9 +193,27 @@ pub struct PeerLine {
     pub amp_rms: Option<f64>,
     /// Which input it came from (file name).
     pub source: String,
+    /// `calls=`: updates measured (on the target).
+    pub calls: Option<u64>,
+    /// `windows=B,I`: the probe windows of the filter's pass and of its
+    /// stand-in's (on the target).
+    pub windows: Option<[u32; 2]>,
+    /// `model_windows=B,I`: the same for the model functions alone.
+    pub model_windows: Option<[u32; 2]>,
+    /// Estimated Cortex-M4 cycles per update, from the run's instruction
+    /// mix when one was given.
+    pub cycles: Option<f64>,
+    /// The same for the model functions alone.
+    pub model_cycles: Option<f64>,
 }
 
 impl PeerLine {
+    /// Estimated cycles of the filter alone, without the model functions
+    /// the harness gives it.
+    pub fn filter_only_cycles(&self) -> Option<f64> {
+        Some(self.cycles? - self.model_cycles.unwrap_or(0.0))
+    }
+
     /// The filter's own cost: [`PeerLine::cost`] less the model functions
     /// the harness gives it.
     pub fn filter_only(&self) -> f64 {
@@ -376,7 +394,31 @@ fn peer_line(rest: &str, source: &str) -> Result<PeerLine, LineProblem> {
         damp_err_pts: error("damp_err_pts")?,
         amp_rms: error("amp_rms")?,
         source: source.to_string(),
+        calls: optional_integer(&f, "calls")?,
+        windows: window_pair(&f, "windows")?,
+        model_windows: window_pair(&f, "model_windows")?,
+        cycles: None,
+        model_cycles: None,
     })
+}
+
+/// `KEY=B,I`: two window numbers.
+fn window_pair(
+    f: &BTreeMap<String, String>,
+    key: &'static str,
+) -> Result<Option<[u32; 2]>, LineProblem> {
+    let Some(text) = f.get(key) else {
+        return Ok(None);
+    };
+    let bad = || LineProblem::NotInteger {
+        key,
+        text: text.clone(),
+    };
+    let (b, i) = text.split_once(',').ok_or_else(bad)?;
+    match (b.parse(), i.parse()) {
+        (Ok(b), Ok(i)) => Ok(Some([b, i])),
+        _ => Err(bad()),
+    }
 }
 
 /// Reads every `kalman ...` line of `text`.
@@ -681,5 +723,15 @@ mod tests {
         assert_eq!(p[0].amp_rms, None);
         assert!(!p[0].is_ours());
         assert!(parse_peers("p", "kalman name=a crate=b filter=ekf unit=ns").is_err());
+        let target = "kalman name=a crate=b filter=ekf cost=9 unit=instructions calls=40 windows=2,3 model_windows=0,1\n";
+        let p = parse_peers("p", target).unwrap();
+        assert_eq!(
+            (p[0].calls, p[0].windows, p[0].model_windows),
+            (Some(40), Some([2, 3]), Some([0, 1]))
+        );
+        for bad in ["windows=2", "windows=2,x", "model_windows=-1,1"] {
+            let line = format!("kalman name=a crate=b filter=ekf cost=9 unit=instructions {bad}");
+            assert!(parse_peers("p", &line).is_err(), "{bad}");
+        }
     }
 }

@@ -206,7 +206,7 @@ fn third_rule(peers: &[PeerLine]) -> Vec<Goal> {
             (Some(o), _) => (
                 Some(o.cost / best.cost),
                 format!(
-                    "ours `{}` ({}) {} against `{}` ({} {}) {}, accuracy as good or better{}",
+                    "ours `{}` ({}) {} against `{}` ({} {}) {}, accuracy as good or better{}{}",
                     o.name,
                     o.filter,
                     sig(o.cost),
@@ -220,7 +220,18 @@ fn third_rule(peers: &[PeerLine]) -> Vec<Goal> {
                         sig(o.cost),
                         sig(best.filter_only()),
                         o.cost / best.filter_only()
-                    ))
+                    )),
+                    match (o.cycles, best.cycles, best.filter_only_cycles()) {
+                        (Some(a), Some(b), Some(f)) => format!(
+                            "; estimated cycles {} against {} ({:.3}), filter only {} ({:.3})",
+                            sig(a),
+                            sig(b),
+                            a / b,
+                            sig(f),
+                            a / f
+                        ),
+                        _ => String::new(),
+                    }
                 ),
             ),
             (None, Some(o)) => (
@@ -865,7 +876,9 @@ pub(super) fn markdown(
              with its Jacobian, the measurement h(x) with its gradient) are the harness's, built on \
              our tracker's own f32 exponential and sine-cosine; **model functions** is their cost \
              per update, **filter only** the peer's cost without it (ours computes its model \
-             inside its update).\n"
+             inside its update). On the Cortex-M4F the costs are exact guest instructions and, \
+             where the run had the instruction-mix plugin, estimated cycles (as for the kernels: \
+             **M4F cycles**, whole update and filter only).\n"
         );
         let mut table = Table::new([
             "source",
@@ -876,6 +889,8 @@ pub(super) fn markdown(
             "unit",
             "model functions",
             "filter only",
+            "M4F cycles",
+            "filter only, cycles",
             "f0 error %",
             "damping error pts",
             "amplitude RMS",
@@ -890,6 +905,8 @@ pub(super) fn markdown(
                 p.unit.clone(),
                 p.model.map_or_else(|| "(inside)".into(), sig),
                 p.model.map_or_else(|| "-".into(), |_| sig(p.filter_only())),
+                p.cycles.map_or_else(|| "-".into(), sig),
+                p.filter_only_cycles().map_or_else(|| "-".into(), sig),
                 num(p.freq_err_pct, 6),
                 num(p.damp_err_pts, 6),
                 num(p.amp_rms, 6),
@@ -1043,6 +1060,11 @@ mod tests {
             damp_err_pts: Some(errors[1]),
             amp_rms: Some(errors[2]),
             source: "m4f".into(),
+            calls: None,
+            windows: None,
+            model_windows: None,
+            cycles: None,
+            model_cycles: None,
         }
     }
 
