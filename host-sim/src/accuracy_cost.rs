@@ -778,6 +778,20 @@ fn inputs_summary(inputs: &Inputs) -> Vec<String> {
             .iter()
             .map(|(s, _)| format!("peer lines: `{s}`")),
     );
+    if let Some(m) = &inputs.peers_mix {
+        out.push(format!("peers' instruction mix: `{}`", m.source));
+    }
+    for (what, build) in [
+        ("other build", &inputs.other_build),
+        ("headline build", &inputs.headline_build),
+    ] {
+        if let Some(b) = build {
+            out.push(format!(
+                "{what} `{}`: `{}`, `{}`",
+                b.name, b.kernels.0, b.mix.source
+            ));
+        }
+    }
     out
 }
 

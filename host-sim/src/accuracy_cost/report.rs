@@ -906,7 +906,9 @@ pub(super) fn markdown(
                 p.model.map_or_else(|| "(inside)".into(), sig),
                 p.model.map_or_else(|| "-".into(), |_| sig(p.filter_only())),
                 p.cycles.map_or_else(|| "-".into(), sig),
-                p.filter_only_cycles().map_or_else(|| "-".into(), sig),
+                p.model
+                    .and(p.filter_only_cycles())
+                    .map_or_else(|| "-".into(), sig),
                 num(p.freq_err_pct, 6),
                 num(p.damp_err_pts, 6),
                 num(p.amp_rms, 6),
