@@ -642,7 +642,7 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
     let warnings = elf_mismatches(&lines, &elfs);
     let mut rows = families::rows(options)?;
     let mut kernels = host::kernels()?;
-    let ns = host::time_all(&mut kernels, options.timing);
+    let (ns, reference_ns) = host::time_with_reference(&mut kernels, options.timing);
     drop(kernels);
     let instr = if options.callgrind && !options.quick && callgrind::available() {
         host::instructions(host::CALLS)?
@@ -663,7 +663,8 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
         .filter(|(k, _)| !lines.used.contains(*k))
         .map(|(_, l)| l.clone())
         .collect();
-    let goals = report::goals(&mut lines, &peers);
+    let mut goals = report::goals(&mut lines, &peers);
+    goals.push(report::host_goal(&ns, reference_ns));
     let footprints = read_footprints(&elfs);
     let builds = match &inputs.other_build {
         Some(o) => {

@@ -299,6 +299,53 @@ pub fn kernels() -> Result<Vec<HostKernel>, Error> {
     Ok(out)
 }
 
+/// The reference kernel of the host timings ([`reference_kernel`]).
+pub const REFERENCE: (&str, &str, usize, &str) = ("reference", "horner-32", 32, "f64");
+
+/// The reference kernel: Horner's rule for a fixed polynomial of degree 32
+/// in f64 at each value of the firmware's sine, a chain of 32 dependent
+/// multiply-adds that no change to the library touches. A host time over
+/// the reference's, both from the same run, carries from one machine or
+/// one load to another better than nanoseconds do.
+pub fn reference_kernel() -> HostKernel {
+    let xs: Vec<f64> = sine().iter().map(|&x| f64::from(x) * 0.25).collect();
+    let mut k = 0usize;
+    let (family, name, n, number) = REFERENCE;
+    HostKernel {
+        key: Key::new(family, name, n, number),
+        pass: Box::new(move |calls| {
+            for _ in 0..calls {
+                let x = black_box(xs.get(k % xs.len().max(1)).copied().unwrap_or(0.0));
+                k = k.wrapping_add(1);
+                let mut acc = 1.0f64;
+                for i in 0..32 {
+                    acc = acc * x + 1.0 / f64::from(i + 2);
+                }
+                black_box(acc);
+            }
+        }),
+    }
+}
+
+/// ns per call of the reference kernel, the faster of a timing before and
+/// one after `kernels` are timed (so that a change of load in between
+/// shows as little as it can).
+pub fn time_with_reference(
+    kernels: &mut [HostKernel],
+    timing: Timing,
+) -> (BTreeMap<Key, f64>, Option<f64>) {
+    let mut reference = [reference_kernel()];
+    let before = time_all(&mut reference, timing);
+    let ns = time_all(kernels, timing);
+    let after = time_all(&mut reference, timing);
+    let key = &reference[0].key;
+    let best = match (before.get(key), after.get(key)) {
+        (Some(a), Some(b)) => Some(a.min(*b)),
+        (a, b) => a.or(b).copied(),
+    };
+    (ns, best)
+}
+
 /// How long to time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Timing {
