@@ -57,9 +57,10 @@ fn smallest_eigenvalue<const N: usize>(p: &[[f32; N]; N]) -> f64 {
     (0..N).map(|i| a[i][i]).fold(f64::INFINITY, f64::min)
 }
 
-/// The covariance is exactly symmetric, finite, and positive definite.
+/// The covariance is exactly symmetric, finite, and positive definite:
+/// its smallest eigenvalue above `-slack`.
 #[allow(clippy::needless_range_loop)]
-fn check_covariance<const N: usize>(state: &ModalState<f32, N>, step: usize) -> f64 {
+fn check_covariance<const N: usize>(state: &ModalState<f32, N>, step: usize, slack: f64) -> f64 {
     let p = state.covariance();
     for i in 0..N {
         for j in 0..N {
@@ -75,7 +76,7 @@ fn check_covariance<const N: usize>(state: &ModalState<f32, N>, step: usize) -> 
         }
     }
     let lmin = smallest_eigenvalue(p);
-    assert!(lmin > 0.0, "step {step}: smallest eigenvalue {lmin}");
+    assert!(lmin > -slack, "step {step}: smallest eigenvalue {lmin}");
     lmin
 }
 
@@ -144,7 +145,7 @@ fn ten_million_updates(filter: Filter, updates: usize) {
         let report = tracker.step(&mut state, &[x as f32]);
         assert!(!report.repaired, "step {k}: covariance repaired");
         if k % 10_000 == 9_999 {
-            lmin = lmin.min(check_covariance(&state, k));
+            lmin = lmin.min(check_covariance(&state, k, 0.0));
             assert!(state.x().iter().all(|v| v.is_finite()), "step {k}");
             let t = (k + 1) as f64 / FS;
             let mode = tracker.mode(&state, 0);
@@ -255,4 +256,89 @@ fn ekf_reacquires_after_a_second_of_silence() {
 fn ukf_reacquires_after_a_second_of_silence() {
     reacquire(Filter::Ukf(UtParams::default()), 1.0);
     reacquire(Filter::Ukf(UtParams::default()), 1.01);
+}
+
+/// Two undamped modes (50 Hz and 123 Hz) seen by three displacement
+/// sensors with different mode shapes: the 16-state path (whole-row
+/// rank-one updates, prediction by mode blocks). 200 000 updates, 40 dB:
+/// the covariance stays exactly symmetric and finite, nothing is repaired,
+/// both frequencies stay within 0.1 %, and with `definite` the covariance
+/// stays positive definite.
+///
+/// The EKF's does not, in f32: the θ variances rest on their floor
+/// (5.8e-12 against a largest diagonal of 1.3e-7), the smallest
+/// eigenvalue is about 2.9e-12, and from about 120 000 updates on it is
+/// negative, down to -4.0e-10 at 200 000, far beyond the rounding of the
+/// entries (2.5e-13). The expanded Joseph form used before the rank-one
+/// update did the same (-4.1e-11 at 130 000). The filter goes on tracking;
+/// the UKF's covariance stays positive definite.
+fn two_modes_three_sensors(filter: Filter, definite: bool) {
+    const UPDATES: usize = 200_000;
+    let noise = 0.5f64.sqrt() * 1e-2;
+    let freqs = [50.0, 123.0];
+    let shapes = [[1.0, 0.8, -0.5], [0.6, -1.0, 0.9]];
+    let sensors = [SensorSpec {
+        measured: Measured::Displacement,
+        noise,
+    }; 3];
+    let modes = [
+        ModeInit {
+            frequency: 50.0 * 1.003,
+            damping: 0.0,
+        },
+        ModeInit {
+            frequency: 123.0 * 0.997,
+            damping: 0.0,
+        },
+    ];
+    let amplitudes = [(1.0, 0.0); 6];
+    let tracker = ModalTracker::<f32, 16>::new(
+        1.0 / FS,
+        &sensors,
+        &modes,
+        &amplitudes,
+        &Tuning::default(),
+        filter,
+    )
+    .unwrap();
+    let mut state = tracker.start();
+    let mut rng = Noise::new(77);
+    let mut lmin = f64::INFINITY;
+    for k in 0..UPDATES {
+        let t = k as f64 / FS;
+        let y: [f32; 3] = std::array::from_fn(|c| {
+            let x: f64 = (0..2)
+                .map(|m| shapes[m][c] * (std::f64::consts::TAU * freqs[m] * t).cos())
+                .sum();
+            (x + noise * rng.gauss()) as f32
+        });
+        let report = tracker.step(&mut state, &y);
+        assert!(!report.repaired, "{filter:?} step {k}: covariance repaired");
+        if k % 10_000 == 9_999 {
+            let slack = if definite { 0.0 } else { f64::INFINITY };
+            lmin = lmin.min(check_covariance(&state, k, slack));
+            for (m, f) in freqs.iter().enumerate() {
+                let mode = tracker.mode(&state, m);
+                let ef = mode.frequency as f64 / f - 1.0;
+                assert!(
+                    !mode.faded && ef.abs() < 1e-3,
+                    "{filter:?} step {k}, mode {m}: f {} (true {f}), faded {}",
+                    mode.frequency,
+                    mode.faded
+                );
+            }
+        }
+    }
+    assert_eq!(state.repairs, 0);
+    eprintln!("{filter:?}, 2 modes x 3 sensors: smallest eigenvalue of P {lmin:.2e}");
+}
+
+#[test]
+fn ekf_two_modes_three_sensors_keep_tracking() {
+    two_modes_three_sensors(Filter::Ekf, false);
+}
+
+#[test]
+fn ukf_two_modes_three_sensors_stay_positive_definite() {
+    two_modes_three_sensors(Filter::Ukf(UtParams::default()), true);
 }

@@ -955,8 +955,8 @@ mod firmware {
             NOISE_SEED
         );
 
-        // The modal tracker: one mode on one accelerometer (4 states), then
-        // two modes on three accelerometers (16 states).
+        // The modal tracker: one mode on one accelerometer (4 states), two
+        // modes on three accelerometers (16 states), and the sizes between.
         let mode = ModeInit {
             frequency: 20.0,
             damping: 0.01,
@@ -986,6 +986,13 @@ mod firmware {
         tracker::<4, 1>("ukf/1-mode-1-acc", ukf, &[mode]);
         tracker::<16, 3>("ekf/2-modes-3-acc", Filter::Ekf, &two);
         tracker::<16, 3>("ukf/2-modes-3-acc", ukf, &two);
+        // The sizes between, for the growth of the cost with the states.
+        tracker::<6, 2>("ekf/1-mode-2-acc", Filter::Ekf, &[mode]);
+        tracker::<6, 2>("ukf/1-mode-2-acc", ukf, &[mode]);
+        tracker::<8, 1>("ekf/2-modes-1-acc", Filter::Ekf, &two);
+        tracker::<8, 1>("ukf/2-modes-1-acc", ukf, &two);
+        tracker::<12, 2>("ekf/2-modes-2-acc", Filter::Ekf, &two);
+        tracker::<12, 2>("ukf/2-modes-2-acc", ukf, &two);
 
         first_period_fit();
         temperature();

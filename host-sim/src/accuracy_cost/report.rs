@@ -11,6 +11,7 @@ use super::plot::{self, Point};
 use super::{CSV_COLUMNS, Footprint, Goal, Key, Lines, Options, Row, rank_cost, ranked_by_cycles};
 use crate::markdown::{Table, cell};
 
+mod bounds;
 mod measures;
 use measures::{builds_section, harness_section, input_table, mca_table};
 
@@ -355,6 +356,7 @@ pub(super) fn goals(lines: &mut Lines, peers: &[PeerLine]) -> Vec<Goal> {
         .cloned()
         .collect();
     out.extend(third_rule(&counted));
+    out.extend(bounds::goals(lines, peers));
     out
 }
 

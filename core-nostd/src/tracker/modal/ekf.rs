@@ -2,7 +2,7 @@
 //! (eqs 3.27-3.28) and the innovation of one sensor with the Jacobian of
 //! eqs 3.26, 3.32 and 3.33.
 
-use super::matrix::{entry, get, put, set, set_row, sym_row};
+use super::matrix::{entry, get, mirror_upper, put, set, set_row, sym_row};
 use super::rotation::rotation_cached;
 use super::{Core, Measured, ModalTracker};
 use crate::real::Real;
@@ -10,114 +10,165 @@ use crate::real::Real;
 impl<T: Real, const N: usize> ModalTracker<T, N> {
     /// EKF prediction: x = f(x), P = F P Fᵀ + Q. F is the identity on the
     /// θ and λ rows; on a pair's rows it holds the rotation `(ec, es)` and
-    /// the derivatives `(-b', a')`, `(a', b')` by θ and λ. First the pair
-    /// rows of F P (whole rows), then their columns on and above the
-    /// diagonal; `P'[θ or λ][pair] = (F P)[pair][θ or λ]` needs no second
-    /// pass. The result is mirrored, so exactly symmetric.
+    /// the derivatives `(-b', a')`, `(a', b')` by θ and λ. Below 8 states
+    /// (one mode, in registers): the pair rows of F P (whole rows), then
+    /// their columns on and above the diagonal; `P'[θ or λ][pair] =
+    /// (F P)[pair][θ or λ]` needs no second pass. From 8 on, in place and
+    /// by mode blocks (the layout is `[θ, λ, a₀, b₀, a₁, b₁, …]` per mode,
+    /// so no index is computed): the pair rows of F P, then the pair
+    /// columns of every row of (F P) Fᵀ; both read the θ and λ rows or
+    /// columns, which they leave alone. The result is mirrored, so exactly
+    /// symmetric.
     #[inline(always)]
     pub(super) fn predict_ekf(&self, state: &mut Core<T, N>, anchor: &mut [[T; 4]; N]) {
-        let (m_n, c_n) = (self.m_n(), self.c_n());
-        let Core { x, p, .. } = state;
-        let mut rot = [(T::ZERO, T::ZERO); N];
-        for (m, (r, a)) in rot.iter_mut().zip(anchor.iter_mut()).enumerate().take(m_n) {
-            let (ti, li) = self.theta_lambda(m);
-            *r = rotation_cached(a, get(x, ti), get(x, li));
-            self.rotate_mode(x, m, *r);
-            let (ec, es) = *r;
-            if N < 8 {
-                // Copies of the rows, read from on and above the diagonal.
-                let (row_t, row_l) = (sym_row(p, ti), sym_row(p, li));
-                for c in 0..c_n {
-                    let (ai, bi) = self.pair(m, c);
-                    let (a1, b1) = (get(x, ai), get(x, bi));
-                    let (ra, rb) = (sym_row(p, ai), sym_row(p, bi));
-                    let (mut na, mut nb) = ([T::ZERO; N], [T::ZERO; N]);
-                    for ((((na, nb), (&pa, &pb)), &pt), &pl) in na
-                        .iter_mut()
-                        .zip(nb.iter_mut())
-                        .zip(ra.iter().zip(&rb))
-                        .zip(&row_t)
-                        .zip(&row_l)
-                    {
-                        *na = ec * pa - es * pb - b1 * pt + a1 * pl;
-                        *nb = es * pa + ec * pb + a1 * pt + b1 * pl;
-                    }
-                    set_row(p, ai, na);
-                    set_row(p, bi, nb);
-                }
-                continue;
-            }
-            // In place: the θ and λ rows come before the pair rows.
-            for c in 0..c_n {
-                let (ai, bi) = self.pair(m, c);
-                let (a1, b1) = (get(x, ai), get(x, bi));
-                let Some((head, tail)) = p.split_at_mut_checked(ai) else {
-                    continue;
-                };
-                let (Some(rt), Some(rl), [ra, rb, ..]) = (head.get(ti), head.get(li), tail) else {
-                    continue;
-                };
-                for (((pa, pb), &pt), &pl) in ra.iter_mut().zip(rb.iter_mut()).zip(rt).zip(rl) {
-                    let (va, vb) = (*pa, *pb);
-                    *pa = ec * va - es * vb - b1 * pt + a1 * pl;
-                    *pb = es * va + ec * vb + a1 * pt + b1 * pl;
-                }
-            }
+        if N >= 8 {
+            self.predict_ekf_blocks(state, anchor);
+            self.add_process_noise(state);
+            return;
         }
-        // Columns of the pair rows, on and above the diagonal.
-        for m in 0..m_n {
-            for c in 0..c_n {
-                let (ai, bi) = self.pair(m, c);
-                for i in [ai, bi] {
-                    let Some(r) = p.get_mut(i) else { continue };
-                    for (m2, &(ec, es)) in rot.iter().enumerate().take(m_n) {
-                        let (ti, li) = self.theta_lambda(m2);
-                        let (vt, vl) = (get(r, ti), get(r, li));
-                        for c2 in 0..c_n {
-                            let (aj, bj) = self.pair(m2, c2);
-                            if bj < i {
-                                continue;
-                            }
-                            let (a1, b1) = (get(x, aj), get(x, bj));
-                            let (va, vb) = (get(r, aj), get(r, bj));
-                            if aj >= i {
-                                put(r, aj, ec * va - es * vb - b1 * vt + a1 * vl);
-                            }
-                            put(r, bj, es * va + ec * vb + a1 * vt + b1 * vl);
-                        }
+        let c_n = self.c_n();
+        let Core { x, p, .. } = state;
+        let (ti, li) = self.theta_lambda(0);
+        let Some(a) = anchor.first_mut() else { return };
+        let (ec, es) = rotation_cached(a, get(x, ti), get(x, li));
+        self.rotate_mode(x, 0, (ec, es));
+        // Copies of the rows, read from on and above the diagonal.
+        let (row_t, row_l) = (sym_row(p, ti), sym_row(p, li));
+        for c in 0..c_n {
+            let (ai, bi) = self.pair(0, c);
+            let (a1, b1) = (get(x, ai), get(x, bi));
+            let (ra, rb) = (sym_row(p, ai), sym_row(p, bi));
+            let (mut na, mut nb) = ([T::ZERO; N], [T::ZERO; N]);
+            for ((((na, nb), (&pa, &pb)), &pt), &pl) in na
+                .iter_mut()
+                .zip(nb.iter_mut())
+                .zip(ra.iter().zip(&rb))
+                .zip(&row_t)
+                .zip(&row_l)
+            {
+                *na = ec * pa - es * pb - b1 * pt + a1 * pl;
+                *nb = es * pa + ec * pb + a1 * pt + b1 * pl;
+            }
+            set_row(p, ai, na);
+            set_row(p, bi, nb);
+        }
+        // Pair columns on and above the diagonal.
+        for c in 0..c_n {
+            let (ai, bi) = self.pair(0, c);
+            for i in [ai, bi] {
+                let Some(r) = p.get_mut(i) else { continue };
+                let (vt, vl) = (get(r, ti), get(r, li));
+                for c2 in 0..c_n {
+                    let (aj, bj) = self.pair(0, c2);
+                    if bj < i {
+                        continue;
                     }
+                    let (a1, b1) = (get(x, aj), get(x, bj));
+                    let (va, vb) = (get(r, aj), get(r, bj));
+                    if aj >= i {
+                        put(r, aj, ec * va - es * vb - b1 * vt + a1 * vl);
+                    }
+                    put(r, bj, es * va + ec * vb + a1 * vt + b1 * vl);
                 }
             }
         }
         // Mirror: a pair row holds its final entries on and above the
         // diagonal; a θ or λ row finds its pair columns below it.
         for i in 0..N {
-            if N < 8 {
-                for j in i + 1..N {
-                    if self.is_amplitude(i) {
-                        let v = entry(p, i, j);
-                        set(p, j, i, v);
-                    } else if self.is_amplitude(j) {
-                        let v = entry(p, j, i);
-                        set(p, i, j, v);
-                    }
-                }
-                continue;
-            }
-            let Some((top, bottom)) = p.split_at_mut_checked(i + 1) else {
-                continue;
-            };
-            let Some(ri) = top.last_mut() else { continue };
-            let pair_row = self.is_amplitude(i);
-            for (rj, j) in bottom.iter_mut().zip(i + 1..) {
-                if pair_row {
-                    put(rj, i, get(ri, j));
+            for j in i + 1..N {
+                if self.is_amplitude(i) {
+                    let v = entry(p, i, j);
+                    set(p, j, i, v);
                 } else if self.is_amplitude(j) {
-                    put(ri, j, get(rj, i));
+                    let v = entry(p, j, i);
+                    set(p, i, j, v);
                 }
             }
         }
         self.add_process_noise(state);
+    }
+
+    /// [`Self::predict_ekf`] from 8 states on: x and P by mode blocks.
+    #[inline(always)]
+    fn predict_ekf_blocks(&self, state: &mut Core<T, N>, anchor: &mut [[T; 4]; N]) {
+        let block = 2 * self.c_n() + 2;
+        let Core { x, p, .. } = state;
+        let mut rot = [(T::ZERO, T::ZERO); N];
+        for ((r, a), xm) in rot
+            .iter_mut()
+            .zip(anchor.iter_mut())
+            .zip(x.chunks_exact_mut(block))
+        {
+            let Some(([t, l], pairs)) = xm.split_first_chunk_mut::<2>() else {
+                continue;
+            };
+            *r = rotation_cached(a, *t, *l);
+            for pair in pairs.chunks_exact_mut(2) {
+                if let [a, b] = pair {
+                    (*a, *b) = rotate(*r, *a, *b);
+                }
+            }
+        }
+        // Rows: a pair's rows of F P from its own rows and its mode's θ and
+        // λ rows.
+        for ((rows, xm), &r) in p
+            .chunks_exact_mut(block)
+            .zip(x.chunks_exact(block))
+            .zip(&rot)
+        {
+            let Some(([rt, rl], pairs)) = rows.split_first_chunk_mut::<2>() else {
+                continue;
+            };
+            for (pair, xp) in pairs
+                .chunks_exact_mut(2)
+                .zip(xm.get(2..).unwrap_or(&[]).chunks_exact(2))
+            {
+                if let ([ra, rb], [a1, b1]) = (pair, xp) {
+                    for (((pa, pb), &pt), &pl) in
+                        ra.iter_mut().zip(rb.iter_mut()).zip(&*rt).zip(&*rl)
+                    {
+                        (*pa, *pb) = transition(r, *a1, *b1, *pa, *pb, pt, pl);
+                    }
+                }
+            }
+        }
+        // Columns of (F P) Fᵀ, a pair of columns at a time, on and above
+        // the diagonal: one short loop down the rows (the θ and λ rows'
+        // entries are then replaced below).
+        for (m2, &r) in rot.iter().enumerate().take(self.m_n()) {
+            let (tj, _) = self.theta_lambda(m2);
+            for c2 in 0..self.c_n() {
+                let (aj, bj) = self.pair(m2, c2);
+                let (a1, b1) = (get(x, aj), get(x, bj));
+                for row in p.iter_mut().take(bj + 1) {
+                    // The mode's columns from θ to this pair: θ, λ first,
+                    // the pair last.
+                    let seg = row.get_mut(tj..=bj).unwrap_or(&mut []);
+                    let Some((&mut [vt, vl], rest)) = seg.split_first_chunk_mut::<2>() else {
+                        continue;
+                    };
+                    let Some((_, [va, vb])) = rest.split_last_chunk_mut::<2>() else {
+                        continue;
+                    };
+                    (*va, *vb) = transition(r, a1, b1, *va, *vb, vt, vl);
+                }
+            }
+        }
+        // A θ or λ row's entries above the diagonal: F leaves its columns
+        // alone, so they are the pair rows' θ and λ entries below it.
+        for m in 0..self.m_n() {
+            let (ti, li) = self.theta_lambda(m);
+            for i in [ti, li] {
+                let Some((top, bottom)) = p.split_at_mut_checked(i + 1) else {
+                    continue;
+                };
+                let Some(ri) = top.last_mut() else { continue };
+                for (rj, j) in bottom.iter().zip(i + 1..) {
+                    put(ri, j, get(rj, i));
+                }
+            }
+        }
+        mirror_upper(p);
     }
 
     /// EKF innovation of sensor `c`: predicted sample, `v = P hᵀ`, and
@@ -185,6 +236,23 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         }
         (zhat, s)
     }
+}
+
+/// A pair rotated by `(ec, es)` (eq 3.28).
+#[inline(always)]
+pub(super) fn rotate<T: Real>((ec, es): (T, T), a: T, b: T) -> (T, T) {
+    (ec * a - es * b, es * a + ec * b)
+}
+
+/// The two entries of a pair's rows (or columns) of F times a column (or
+/// row): the rotation of `(pa, pb)` and the θ and λ derivatives of the
+/// rotated pair `(a1, b1)` times `(pt, pl)`.
+#[inline(always)]
+fn transition<T: Real>((ec, es): (T, T), a1: T, b1: T, pa: T, pb: T, pt: T, pl: T) -> (T, T) {
+    (
+        ec * pa - es * pb - b1 * pt + a1 * pl,
+        es * pa + ec * pb + a1 * pt + b1 * pl,
+    )
 }
 
 /// Predicted sample of a sensor of derivative order K (scaled) from one

@@ -20,13 +20,17 @@
 //!
 //! - **Filters**: an extended Kalman filter (Jacobians of the process and of
 //!   eqs 3.26/3.32/3.33) or an unscented one (scaled unscented transform,
-//!   [`UtParams`]). Both apply the sensors one by one (diagonal R, eq 3.8)
-//!   and update the covariance in the Joseph form for a scalar observation,
-//!   `P - K Pxzᵀ - Pxz Kᵀ + Pzz K Kᵀ`, which stays valid when a gain row is
-//!   zeroed (frozen parameters), computed on one triangle and mirrored.
+//!   [`UtParams`]). Both apply the sensors one by one (diagonal R, eq 3.8).
+//!   With the gain K zeroed on the frozen rows (frozen parameters), the
+//!   Joseph form for a scalar observation, `P - K Pxzᵀ - Pxz Kᵀ + Pzz K Kᵀ`,
+//!   is exactly the rank-one update `P - (v vᵀ - v_F v_Fᵀ)/Pzz` (v = Pxz,
+//!   v_F its frozen entries), which is what is computed: below 8 states on
+//!   one triangle, mirrored; from 8 on as whole rows of `P - w wᵀ` with
+//!   `w = v/√Pzz`, the same product on both sides of the diagonal.
 //! - **Structure**: F is the identity on the θ and λ rows and a scaled
 //!   rotation plus two columns on each pair's rows, so the EKF prediction
-//!   transforms only the pair rows and then their columns on one triangle.
+//!   transforms only the pair rows and then their columns on one triangle
+//!   (from 8 states on by mode blocks, with no index computed).
 //!   The UKF factors P with θ and λ first: the sigma points of the amplitude
 //!   columns then share the centre's θ and λ, move linearly under the
 //!   process and the sensors, and add exactly `R S Rᵀ` (S the amplitude
@@ -34,7 +38,10 @@
 //!   and `S Hᵀ` to Pxz; only the 4 modes sigma points of the θ and λ
 //!   columns are propagated one by one. This is the scaled transform for
 //!   that square root of P, not an approximation (tested against all
-//!   2n + 1 points).
+//!   2n + 1 points). From 8 states on a sensor's innovation takes only the
+//!   θ and λ columns of the factor (left-looking) and `S Hᵀ = P Hᵀ -
+//!   Σ_t l_t (l_t · H)`; the whole factorisation, which also checks that the
+//!   amplitude block is positive definite, runs once per step.
 //! - **Safety**: θ kept in (0, θ_max] below Nyquist and λ in a band given by
 //!   the largest damping ratio; covariance diagonal floored; an innovation
 //!   gate (outliers skipped, a run of them re-acquires); a mode whose
@@ -42,9 +49,10 @@
 //!   σ are frozen and its amplitudes kept loose until it comes back above
 //!   twice that, when ω and σ get their start uncertainty again (they may
 //!   have moved while the mode was gone) and are tracked again. A step
-//!   that would leave a non-finite state (or meets a covariance that is not
-//!   positive definite, or an innovation variance that is not positive and
-//!   below [`Real::GUARD`]) is undone and the covariance reset to its start
+//!   that would leave a non-finite state (or meets, in the UKF, a pivot of
+//!   the covariance's factorisation, or an innovation variance, that is not
+//!   a positive normal number below [`Real::GUARD`]) is undone and the
+//!   covariance reset to its start
 //!   value. That value, the process noise and the sensor noise variances
 //!   are checked below [`Real::GUARD`] in the working type at construction
 //!   (a tuning beyond is a typed error), so the reset restores a finite
@@ -52,10 +60,12 @@
 //!   samples.
 //! - **States**: `N = modes (2 sensors + 2)` values and an N×N covariance.
 //! - **Cost** per sample, n = N states, M modes, C sensors: EKF about 6n²
-//!   (prediction) + C (n² + 4Mn) multiply-adds and one division per sensor;
-//!   UKF one factorisation (n³/6 multiply-adds, n - 1 Newton `1/√d`) per
-//!   prediction and per sensor, (4M + 1) n²/2 for the predicted covariance
-//!   and 4M observations per sensor. The rotation `e^λ (cos θ, sin θ)` is
+//!   (prediction) + C (n² + 4Mn) multiply-adds and one division (from 8
+//!   states, one `1/√`) per sensor; UKF one factorisation per prediction
+//!   (n³/2 multiply-adds as whole rows, n - 1 Newton `1/√d`), (4M + 1) n²/2
+//!   for the predicted covariance, and per sensor the 2M θ and λ columns of
+//!   the factor (below 8 states the whole factorisation), 4M observations
+//!   and the rank-one update. The rotation `e^λ (cos θ, sin θ)` is
 //!   taken in `f32` from a per-mode anchor when (θ, λ) is within 2^-10 of
 //!   it (a second-order series, [`ModalState`] keeps the anchor) and the
 //!   sigma points' from the centre's by a fourth-order series; the sin/cos
@@ -63,10 +73,12 @@
 //!   (one mode) the whole step is unrolled on a copy of the state held in
 //!   registers. No f64, no libm trig and no square root per sample.
 //!   Guest instructions per call of `step` through a non-inlined function
-//!   on Cortex-M4F (QEMU, f32; `cargo run -q -p bushing-boards --release
-//!   --target thumbv7em-none-eabihf --bin kernel-cost`, family `tracker`):
-//!   one mode and one accelerometer (4 states) EKF 346, UKF 1002; two modes
-//!   and three accelerometers (16 states) EKF 15 283, UKF 107 020.
+//!   on Cortex-M4F, worst of three inputs (QEMU, f32; `cargo run -q -p
+//!   bushing-boards --release --target thumbv7em-none-eabihf --bin
+//!   kernel-cost`, family `tracker`): one mode and one accelerometer
+//!   (4 states) EKF 426, UKF 1 090; two modes and three accelerometers
+//!   (16 states) EKF 14 334, UKF 64 978. Estimated cycles in
+//!   `docs/accuracy-cost.md`.
 
 // The parts: the public inputs and outputs (`types`), construction
 // (`construct`), the two filters (`ekf`, `ukf`), the rotation of the
@@ -87,8 +99,9 @@ pub use types::{
 
 use crate::real::Real;
 
+use crate::tracker::fast::{min_positive, rsqrt};
 use construct::powk;
-use matrix::{add_diag, entry, get, mirror_upper, put, set};
+use matrix::{add_diag, entry, get, put, set};
 use rotation::anchor_at;
 use safety::{all_finite, cold};
 
@@ -468,9 +481,9 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         } else {
             self.innovation_ekf(state, c, v)
         };
-        // Positive and finite (GUARD: a comparison rather than a test of
-        // the bit pattern).
-        if s > T::ZERO && s < T::GUARD {
+        // Positive, normal (for `update`'s 1/√s) and finite (GUARD: a
+        // comparison rather than a test of the bit pattern).
+        if s > min_positive::<T>() && s < T::GUARD {
             Some((zhat, s))
         } else {
             cold();
@@ -496,54 +509,75 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     }
 
     /// Scalar update with cross-covariance `v`, innovation variance `s` and
-    /// innovation `y`, in the Joseph form `P - K vᵀ - v Kᵀ + s K Kᵀ`
-    /// (valid for the frozen rows' zero gain), as `P + K uᵀ - v Kᵀ` with
-    /// `u = s K - v` (zero but for rounding where the gain is not frozen),
-    /// on and above the diagonal, mirrored.
+    /// innovation `y`. With K the gain `v/s` whose frozen rows are zero,
+    /// the Joseph form `P - K vᵀ - v Kᵀ + s K Kᵀ` (valid for that gain) is
+    /// exactly `P - (v vᵀ - v_F v_Fᵀ)/s`, v_F the frozen entries of v: a
+    /// rank-one update that leaves alone the entries whose row and column
+    /// are both frozen, one multiply-add per entry. Below 8 states (one
+    /// mode, registers) as `P_ij - v_i k_j` on and above the diagonal,
+    /// mirrored; from 8 on whole rows of `P_ij - w_i w_j` with `w = v/√s`,
+    /// the same product on both sides of the diagonal, so P stays exactly
+    /// symmetric with no mirror. `s` is positive and normal (checked by
+    /// `innovation`).
     #[inline(always)]
     fn update(&self, state: &mut Core<T, N>, v: &[T; N], s: T, y: T) {
-        let inv = T::ONE / s;
-        let mut k = [T::ZERO; N];
-        for (ki, vi) in k.iter_mut().zip(v) {
-            *ki = *vi * inv;
-        }
+        let mut frozen = [false; N];
         for m in 0..self.m_n() {
             if state.faded.get(m).copied().unwrap_or(false) {
                 let (ti, li) = self.theta_lambda(m);
-                put(&mut k, ti, T::ZERO);
-                put(&mut k, li, T::ZERO);
+                put(&mut frozen, ti, true);
+                put(&mut frozen, li, true);
             }
-        }
-        for (xi, ki) in state.x.iter_mut().zip(&k) {
-            *xi += *ki * y;
-        }
-        let mut u = [T::ZERO; N];
-        for ((ui, ki), vi) in u.iter_mut().zip(&k).zip(v) {
-            *ui = s * *ki - *vi;
         }
         let p = &mut state.p;
         if N < 8 {
+            let inv = T::ONE / s;
+            let (mut k, mut masked) = ([T::ZERO; N], [T::ZERO; N]);
+            for (((k, m), &vi), &fi) in k.iter_mut().zip(masked.iter_mut()).zip(v).zip(&frozen) {
+                *k = vi * inv;
+                *m = if fi { T::ZERO } else { *k };
+            }
+            for (xi, mi) in state.x.iter_mut().zip(&masked) {
+                *xi += *mi * y;
+            }
             // Fully unrolled: every entry a register.
             for i in 0..N {
-                let (ki, vi) = (get(&k, i), get(v, i));
+                let (vi, fi) = (get(v, i), frozen.get(i).copied().unwrap_or(false));
                 for j in i..N {
-                    let (kj, uj) = (get(&k, j), get(&u, j));
-                    let val = entry(p, i, j) + ki * uj - vi * kj;
+                    let kj = if fi { get(&masked, j) } else { get(&k, j) };
+                    let val = entry(p, i, j) - vi * kj;
                     set(p, i, j, val);
                     set(p, j, i, val);
                 }
             }
             return;
         }
-        for (i, (row, (&ki, &vi))) in p.iter_mut().zip(k.iter().zip(v)).enumerate() {
-            let (Some(r), Some(kt), Some(ut)) = (row.get_mut(i..), k.get(i..), u.get(i..)) else {
-                continue;
-            };
-            for ((pij, &kj), &uj) in r.iter_mut().zip(kt).zip(ut) {
-                *pij = *pij + ki * uj - vi * kj;
+        let r = rsqrt(s);
+        let mut w = [T::ZERO; N];
+        for (w, &vi) in w.iter_mut().zip(v) {
+            *w = vi * r;
+        }
+        // K y = w (y/√s) on the rows that are not frozen.
+        let ry = r * y;
+        for ((xi, &wi), &fi) in state.x.iter_mut().zip(&w).zip(&frozen) {
+            if !fi {
+                *xi += wi * ry;
             }
         }
-        mirror_upper(p);
+        for (row, (&wi, &fi)) in p.iter_mut().zip(w.iter().zip(&frozen)) {
+            if !fi {
+                for (pij, &wj) in row.iter_mut().zip(&w) {
+                    *pij -= wi * wj;
+                }
+                continue;
+            }
+            cold();
+            for ((pij, &wj), &fj) in row.iter_mut().zip(&w).zip(&frozen) {
+                if !fj {
+                    *pij -= wi * wj;
+                }
+            }
+        }
     }
 }
 

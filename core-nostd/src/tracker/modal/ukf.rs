@@ -242,10 +242,18 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         v: &mut [T; N],
     ) -> Option<(T, T)> {
         let mut cols = [[T::ZERO; N]; N];
-        let mut schur = [[T::ZERO; N]; N];
-        if !self.factor(&state.p, &mut cols, &mut schur) {
+        // The amplitude covariance given θ and λ, formed below 8 states.
+        let schur = if N < 8 {
+            let mut schur = [[T::ZERO; N]; N];
+            if !self.factor(&state.p, &mut cols, &mut schur) {
+                return None;
+            }
+            Some(schur)
+        } else if self.leading_columns(&state.p, &mut cols) {
+            None
+        } else {
             return None;
-        }
+        };
         let (m_n, k_n) = (self.m_n(), 2 * self.m_n());
         let w = self.ut;
         let x = &state.x;
@@ -279,17 +287,35 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             sum += a + b;
         }
         let zhat = w.centre_mean * z0 + w.wi * sum;
-        // u = S Hᵀ (amplitude rows), then H S Hᵀ.
+        // u = S Hᵀ (amplitude rows), then H S Hᵀ. From 8 states on S is
+        // not formed: S Hᵀ = P Hᵀ - Σ_t l_t (l_t · H) on those rows.
         let mut u = [T::ZERO; N];
+        let mut g = [T::ZERO; N];
+        if N >= 8 {
+            for (gt, l) in g.iter_mut().zip(&cols).take(k_n) {
+                for (m, &(hp, hq)) in h.iter().enumerate().take(m_n) {
+                    let (ai, bi) = self.pair(m, c);
+                    *gt += hp * get(l, ai) + hq * get(l, bi);
+                }
+            }
+        }
         for (i, ui) in u.iter_mut().enumerate() {
             if !self.is_amplitude(i) {
                 continue;
             }
-            let r = sym_row(&schur, i);
+            let r = match &schur {
+                Some(schur) => sym_row(schur, i),
+                None => row(&state.p, i),
+            };
             let mut acc = T::ZERO;
             for (m, &(hp, hq)) in h.iter().enumerate().take(m_n) {
                 let (ai, bi) = self.pair(m, c);
                 acc += hp * get(&r, ai) + hq * get(&r, bi);
+            }
+            if N >= 8 {
+                for (l, &gt) in cols.iter().zip(&g).take(k_n) {
+                    acc -= get(l, i) * gt;
+                }
             }
             *ui = acc;
         }
@@ -314,6 +340,43 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             *vi = w.wi_spread * acc + *ui;
         }
         Some((zhat, s))
+    }
+}
+
+impl<T: Real, const N: usize> ModalTracker<T, N> {
+    /// The θ and λ columns of [`Self::factor`]'s Cholesky factor alone
+    /// (8 states or more), left-looking: column t is P's pivot column less
+    /// the columns before it times their entry at the pivot, scaled by
+    /// `1/√d`, and zero on the states eliminated before. The amplitude
+    /// pivots are not eliminated: an innovation needs only `S Hᵀ`, which
+    /// these columns give, and the prediction's factorisation checks the
+    /// whole covariance once per step. False if a pivot is not usable.
+    #[inline(always)]
+    fn leading_columns(&self, p: &[[T; N]; N], cols: &mut [[T; N]; N]) -> bool {
+        for t in 0..2 * self.m_n() {
+            let pt = self.pivot(t);
+            let mut col = row(p, pt);
+            for l in cols.iter().take(t) {
+                let f = get(l, pt);
+                for (c, &li) in col.iter_mut().zip(l) {
+                    *c -= li * f;
+                }
+            }
+            let d = get(&col, pt);
+            if !pivot_ok(d) {
+                return false;
+            }
+            let r = rsqrt(d);
+            for c in col.iter_mut() {
+                *c *= r;
+            }
+            put(&mut col, pt, d * r);
+            for s in 0..t {
+                put(&mut col, self.pivot(s), T::ZERO);
+            }
+            put(cols, t, col);
+        }
+        true
     }
 }
 
