@@ -20,19 +20,9 @@
 //! type, known at compile time; another [`Real`] type (fixed point) takes its
 //! own `exp` and `sqrt`.
 
+pub use crate::real::{is_f32, is_f64, min_positive, rsqrt};
+
 use crate::real::Real;
-
-/// True when `T` is `f32` (by size and epsilon, known at compile time).
-#[inline(always)]
-pub fn is_f32<T: Real>() -> bool {
-    core::mem::size_of::<T>() == 4 && T::EPSILON.to_f64() == f64::from(f32::EPSILON)
-}
-
-/// True when `T` is `f64`.
-#[inline(always)]
-pub fn is_f64<T: Real>() -> bool {
-    core::mem::size_of::<T>() == 8 && T::EPSILON.to_f64() == f64::EPSILON
-}
 
 /// `e^x`; the polynomial below |x| = 1/16 in `f32`, libm elsewhere. NaN
 /// gives NaN.
@@ -43,48 +33,6 @@ pub fn exp_small<T: Real>(x: T) -> T {
         T::ONE + x * (T::ONE + x * (c(2.0) + x * (c(6.0) + x * (c(24.0) + x * c(120.0)))))
     } else {
         x.exp()
-    }
-}
-
-/// Smallest positive normal number of the type (`f32` or `f64`; the `f32`
-/// one, which rounds to zero in a fixed-point type, for any other). [`rsqrt`] expects its argument above it.
-#[inline(always)]
-pub fn min_positive<T: Real>() -> T {
-    if is_f64::<T>() {
-        T::from_f64(f64::MIN_POSITIVE)
-    } else {
-        T::from_f64(f64::from(f32::MIN_POSITIVE))
-    }
-}
-
-/// `1/√x` for a positive, normal, finite x (see the module docs); other
-/// arguments give an unspecified value.
-#[inline(always)]
-pub fn rsqrt<T: Real>(x: T) -> T {
-    if is_f32::<T>() {
-        {
-            // For f32 these conversions are the identity and vanish.
-            let x = x.to_f64() as f32;
-            let half = 0.5 * x;
-            let mut y = f32::from_bits(0x5f37_5a86_u32.wrapping_sub(x.to_bits() >> 1));
-            y *= 1.5 - half * y * y;
-            y *= 1.5 - half * y * y;
-            y *= 1.5 - half * y * y;
-            T::from_f64(f64::from(y))
-        }
-    } else if is_f64::<T>() {
-        {
-            let x = x.to_f64();
-            let half = 0.5 * x;
-            let mut y = f64::from_bits(0x5fe6_eb50_c7b5_37a9_u64.wrapping_sub(x.to_bits() >> 1));
-            y *= 1.5 - half * y * y;
-            y *= 1.5 - half * y * y;
-            y *= 1.5 - half * y * y;
-            y *= 1.5 - half * y * y;
-            T::from_f64(y)
-        }
-    } else {
-        T::ONE / x.sqrt()
     }
 }
 

@@ -91,7 +91,8 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     /// [`Self::predict_ekf`] from 8 states on: x and P by mode blocks.
     #[inline(always)]
     fn predict_ekf_blocks(&self, state: &mut Core<T, N>, anchor: &mut [[T; 4]; N]) {
-        let block = 2 * self.c_n() + 2;
+        // At least 2 (provably, so that no chunking can panic).
+        let block = (2 * self.c_n() + 2).max(2);
         let Core { x, p, .. } = state;
         let mut rot = [(T::ZERO, T::ZERO); N];
         for ((r, a), xm) in rot

@@ -70,14 +70,15 @@
 //!   it (a second-order series, [`ModalState`] keeps the anchor) and the
 //!   sigma points' from the centre's by a fourth-order series; the sin/cos
 //!   polynomial and `e^λ` run only when an anchor moves. Below 8 states
-//!   (one mode) the whole step is unrolled on a copy of the state held in
-//!   registers. No f64, no libm trig and no square root per sample.
+//!   (one mode) the whole step is unrolled, at 4 states on a copy of the
+//!   state held in registers. No f64, no libm trig and no square root per
+//!   sample.
 //!   Guest instructions per call of `step` through a non-inlined function
 //!   on Cortex-M4F, worst of three inputs (QEMU, f32; `cargo run -q -p
 //!   bushing-boards --release --target thumbv7em-none-eabihf --bin
 //!   kernel-cost`, family `tracker`): one mode and one accelerometer
 //!   (4 states) EKF 426, UKF 1 090; two modes and three accelerometers
-//!   (16 states) EKF 14 334, UKF 64 978. Estimated cycles in
+//!   (16 states) EKF 14 280, UKF 64 697. Estimated cycles in
 //!   `docs/accuracy-cost.md`.
 
 // The parts: the public inputs and outputs (`types`), construction
@@ -369,9 +370,12 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             reacquisitions,
             ..
         } = state;
-        let (mut report, ok) = if N < 8 {
-            // One mode: the step runs on a copy that the optimiser keeps in
-            // registers, and the copy is the undo.
+        let (mut report, ok) = if N <= 4 {
+            // One mode on one sensor: the step runs on a copy that the
+            // optimiser keeps in registers, and the copy is the undo. From
+            // 6 states on the copy goes through memory (a copy each way,
+            // a fifth of the 6-state EKF's step), so the estimate alone is
+            // saved.
             let mut work = core.clone();
             let (report, ok) =
                 self.run::<UKF>(&mut work, anchor, outliers, reacquisitions, samples);

@@ -299,18 +299,23 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 }
             }
         }
+        let zero = [T::ZERO; N];
         for (i, ui) in u.iter_mut().enumerate() {
             if !self.is_amplitude(i) {
                 continue;
             }
+            let formed;
             let r = match &schur {
-                Some(schur) => sym_row(schur, i),
-                None => row(&state.p, i),
+                Some(schur) => {
+                    formed = sym_row(schur, i);
+                    &formed
+                }
+                None => state.p.get(i).unwrap_or(&zero),
             };
             let mut acc = T::ZERO;
             for (m, &(hp, hq)) in h.iter().enumerate().take(m_n) {
                 let (ai, bi) = self.pair(m, c);
-                acc += hp * get(&r, ai) + hq * get(&r, bi);
+                acc += hp * get(r, ai) + hq * get(r, bi);
             }
             if N >= 8 {
                 for (l, &gt) in cols.iter().zip(&g).take(k_n) {
