@@ -3,7 +3,7 @@
 //! eqs 3.26, 3.32 and 3.33.
 
 use super::matrix::{entry, get, mirror_upper, put, set, set_row, sym_row};
-use super::rotation::rotation_cached;
+use super::rotation::{rotate, rotation_cached};
 use super::{Core, Measured, ModalTracker};
 use crate::real::Real;
 
@@ -14,11 +14,11 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     /// (one mode, in registers): the pair rows of F P (whole rows), then
     /// their columns on and above the diagonal; `P'[θ or λ][pair] =
     /// (F P)[pair][θ or λ]` needs no second pass. From 8 on, in place and
-    /// by mode blocks (the layout is `[θ, λ, a₀, b₀, a₁, b₁, …]` per mode,
-    /// so no index is computed): the pair rows of F P, then the pair
-    /// columns of every row of (F P) Fᵀ; both read the θ and λ rows or
-    /// columns, which they leave alone. The result is mirrored, so exactly
-    /// symmetric.
+    /// by mode blocks (the layout is `[θ, λ, a₀, b₀, a₁, b₁, …]` per mode):
+    /// the pair rows of F P, then the pair columns of (F P) Fᵀ on and above
+    /// the diagonal, then the θ and λ rows' entries above it from the pair
+    /// rows below; the transforms read the θ and λ rows or columns, which
+    /// they leave alone. The result is mirrored, so exactly symmetric.
     #[inline(always)]
     pub(super) fn predict_ekf(&self, state: &mut Core<T, N>, anchor: &mut [[T; 4]; N]) {
         if N >= 8 {
@@ -46,8 +46,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 .zip(&row_t)
                 .zip(&row_l)
             {
-                *na = ec * pa - es * pb - b1 * pt + a1 * pl;
-                *nb = es * pa + ec * pb + a1 * pt + b1 * pl;
+                (*na, *nb) = transition((ec, es), a1, b1, pa, pb, pt, pl);
             }
             set_row(p, ai, na);
             set_row(p, bi, nb);
@@ -65,10 +64,11 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                     }
                     let (a1, b1) = (get(x, aj), get(x, bj));
                     let (va, vb) = (get(r, aj), get(r, bj));
+                    let (na, nb) = transition((ec, es), a1, b1, va, vb, vt, vl);
                     if aj >= i {
-                        put(r, aj, ec * va - es * vb - b1 * vt + a1 * vl);
+                        put(r, aj, na);
                     }
-                    put(r, bj, es * va + ec * vb + a1 * vt + b1 * vl);
+                    put(r, bj, nb);
                 }
             }
         }
@@ -237,12 +237,6 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         }
         (zhat, s)
     }
-}
-
-/// A pair rotated by `(ec, es)` (eq 3.28).
-#[inline(always)]
-pub(super) fn rotate<T: Real>((ec, es): (T, T), a: T, b: T) -> (T, T) {
-    (ec * a - es * b, es * a + ec * b)
 }
 
 /// The two entries of a pair's rows (or columns) of F times a column (or

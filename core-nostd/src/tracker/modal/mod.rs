@@ -78,7 +78,7 @@
 //!   bushing-boards --release --target thumbv7em-none-eabihf --bin
 //!   kernel-cost`, family `tracker`): one mode and one accelerometer
 //!   (4 states) EKF 426, UKF 1 090; two modes and three accelerometers
-//!   (16 states) EKF 14 280, UKF 64 697. Estimated cycles in
+//!   (16 states) EKF 14 329, UKF 64 421. Estimated cycles in
 //!   `docs/accuracy-cost.md`.
 
 // The parts: the public inputs and outputs (`types`), construction
@@ -103,7 +103,7 @@ use crate::real::Real;
 use crate::tracker::fast::{min_positive, rsqrt};
 use construct::powk;
 use matrix::{add_diag, entry, get, put, set};
-use rotation::anchor_at;
+use rotation::{anchor_at, rotate};
 use safety::{all_finite, cold};
 
 /// Running state: estimate, covariance and counters.
@@ -331,8 +331,9 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         for k in 0..self.c_n() {
             let (ai, bi) = self.pair(m, k);
             let (a, b) = (get(x, ai), get(x, bi));
-            put(x, ai, ec * a - es * b);
-            put(x, bi, es * a + ec * b);
+            let (a, b) = rotate((ec, es), a, b);
+            put(x, ai, a);
+            put(x, bi, b);
         }
     }
 

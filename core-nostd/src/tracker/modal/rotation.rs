@@ -103,6 +103,12 @@ pub(super) fn rotation_near<T: Real>(anchor: &[T; 4], theta: T, lambda: T) -> Op
     Some((ca + (ca * er - sa * ei), sa + (ca * ei + sa * er)))
 }
 
+/// A pair `(a, b)` turned by the scaled rotation `(ec, es)` (eq 3.28).
+#[inline(always)]
+pub(super) fn rotate<T: Real>((ec, es): (T, T), a: T, b: T) -> (T, T) {
+    (ec * a - es * b, es * a + ec * b)
+}
+
 /// The rotation of an estimate's (θ, λ): from the mode's anchor when near
 /// it, else by the polynomials, which become the new anchor.
 #[inline(always)]

@@ -3,7 +3,7 @@
 //! closed form (see the module docs of `modal`).
 
 use super::matrix::{entry, get, put, row, set, set_row, sym_row};
-use super::rotation::{rotation_cached, rotation_pair};
+use super::rotation::{rotate, rotation_cached, rotation_pair};
 use super::{Core, ModalTracker};
 use crate::real::Real;
 use crate::tracker::fast::{min_positive, rsqrt};
@@ -193,8 +193,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 for (j, (na, nb)) in na.iter_mut().zip(nb.iter_mut()).enumerate() {
                     if self.is_amplitude(j) {
                         let (va, vb) = (get(&sa, j), get(&sb, j));
-                        *na = ec * va - es * vb;
-                        *nb = es * va + ec * vb;
+                        (*na, *nb) = rotate((ec, es), va, vb);
                     }
                 }
                 set_row(&mut rs, ai, na);
@@ -213,12 +212,13 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                                 continue;
                             }
                             let (va, vb) = (get(&r, aj), get(&r, bj));
+                            let (ra, rb) = rotate((ec, es), va, vb);
                             if aj >= i {
-                                let v = entry(p, i, aj) + (ec * va - es * vb);
+                                let v = entry(p, i, aj) + ra;
                                 set(p, i, aj, v);
                                 set(p, aj, i, v);
                             }
-                            let v = entry(p, i, bj) + (es * va + ec * vb);
+                            let v = entry(p, i, bj) + rb;
                             set(p, i, bj, v);
                             set(p, bj, i, v);
                         }
