@@ -121,10 +121,15 @@ impl<T: Real, const N: usize> Backbone<T> for Polynomial<T, N> {
 /// Value and derivative of Σ c_k x^k by Horner's scheme.
 #[inline(always)]
 fn horner<T: Real, const N: usize>(c: &[T; N], x: T) -> (T, T) {
-    let mut f = T::ZERO;
+    // The leading coefficient starts both sums, which then need no
+    // products by zero: the same values as starting from f = k = 0.
+    let Some((&top, rest)) = c.split_last() else {
+        return (T::ZERO, T::ZERO);
+    };
+    let mut f = top;
     let mut k = T::ZERO;
-    for &ck in c.iter().rev() {
-        k = k * x + f;
+    for (i, &ck) in rest.iter().rev().enumerate() {
+        k = if i == 0 { f } else { k * x + f };
         f = f * x + ck;
     }
     (f, k)

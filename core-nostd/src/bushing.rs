@@ -262,13 +262,22 @@ macro_rules! tuple_effect {
             fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> Self::Report {
                 ($(self.$idx.step(&mut state.$idx, drive),)+)
             }
+            /// The members' sum from the first member's output (no
+            /// addition of zero, which the compiler must keep for the sign
+            /// of a zero).
             #[inline(always)]
             fn total(report: &Self::Report) -> EffectOutput<T> {
-                EffectOutput::zero() $(.plus($name::total(&report.$idx)))+
+                [$($name::total(&report.$idx)),+]
+                    .into_iter()
+                    .reduce(EffectOutput::plus)
+                    .unwrap_or(EffectOutput::zero())
             }
             #[inline(always)]
             fn magnitude(report: &Self::Report) -> T {
-                T::ZERO $(+ $name::magnitude(&report.$idx))+
+                [$($name::magnitude(&report.$idx)),+]
+                    .into_iter()
+                    .reduce(|a, b| a + b)
+                    .unwrap_or(T::ZERO)
             }
             #[inline(always)]
             fn step_if(
@@ -432,7 +441,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
         let mut faults = Faults::NONE;
         let mut x = x0;
         let (mut f, mut k) = self.backbone.eval(x);
-        if !x.is_finite() || !within_guard(x, f, k) {
+        if !within(x) || !within_guard(f, k) {
             faults.raise(if x.is_finite() {
                 Faults::OUT_OF_RANGE
             } else {
@@ -458,11 +467,18 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
     /// dissipated energy, with its division).
     #[inline(always)]
     pub fn step(&self, state: &mut BushingState<T, E::State>, x: T) -> Output<T, E::Report> {
-        if !x.is_finite() {
-            return refuse(state, self.g0, Faults::NON_FINITE_INPUT);
+        // One compare refuses NaN, infinities and finite values beyond the
+        // guard; which of them it was is sorted out on the refusal path.
+        if !within(x) {
+            let fault = if x.is_finite() {
+                Faults::OUT_OF_RANGE
+            } else {
+                Faults::NON_FINITE_INPUT
+            };
+            return refuse(state, self.g0, fault);
         }
         let (f_inf, k_inf) = self.backbone.eval(x);
-        if !within_guard(x, f_inf, k_inf) {
+        if !within_guard(f_inf, k_inf) {
             return refuse(state, self.g0, Faults::OUT_OF_RANGE);
         }
         let drive = Drive {
@@ -479,7 +495,8 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
         // force and the total tangent stay finite and within the guard.
         let accept = |r: &E::Report| {
             let t = E::total(r);
-            within(E::magnitude(r))
+            // The magnitude is a sum of magnitudes: no sign to strip.
+            (E::magnitude(r) <= T::GUARD)
                 & within(elastic + t.force)
                 & within(elastic_tangent + t.tangent)
         };
@@ -523,14 +540,14 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
     }
 }
 
-/// The displacement and the backbone's force within the guard (the
-/// hysteresis laws work on displacement distances, the energies on squared
-/// forces), and the tangent positive (the construction proves it in f64; a
-/// tangent that rounds to zero in the working type would make the
+/// The backbone's force within the guard (the hysteresis laws work on
+/// displacement distances, within the guard as well, the energies on
+/// squared forces), and the tangent positive (the construction proves it in
+/// f64; a tangent that rounds to zero in the working type would make the
 /// dissipated energy 0/0) and within the guard.
 #[inline(always)]
-fn within_guard<T: Real>(x: T, f: T, k: T) -> bool {
-    x.abs() <= T::GUARD && f.abs() <= T::GUARD && k > T::ZERO && k <= T::GUARD
+fn within_guard<T: Real>(f: T, k: T) -> bool {
+    f.abs() <= T::GUARD && k > T::ZERO && k <= T::GUARD
 }
 
 /// Flags a step whose dissipated energy left the working type; it counts

@@ -52,16 +52,6 @@ impl<T: Real> CellState<T> {
     }
 }
 
-fn direction<T: Real>(dx: T) -> T {
-    if dx > T::ZERO {
-        T::ONE
-    } else if dx < T::ZERO {
-        -T::ONE
-    } else {
-        T::ZERO
-    }
-}
-
 /// Dahl's friction cell (eq 1.43): `dF/dx = k_d (1 - s F / F_f)^α`,
 /// s = sign(ẋ).
 ///
@@ -162,6 +152,31 @@ fn whole_power(e: f64) -> Option<u8> {
     (k == e && (0.0..=f64::from(MAX_WHOLE_POWER)).contains(&k)).then_some(k as u8)
 }
 
+/// How a Bouc-Wen cell forms |w|^(n-1) and finds its root.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Exponent {
+    /// n = 1: the root in closed form.
+    One,
+    /// n = 2: the root in closed form.
+    Two,
+    /// n - 1 a whole number from 2 to [`MAX_WHOLE_POWER`]: that many
+    /// products, Newton steps.
+    Whole(u8),
+    /// Any other n: `powf`, Newton steps.
+    Real,
+}
+
+impl Exponent {
+    fn of(n: f64) -> Self {
+        match whole_power(n - 1.0) {
+            Some(0) => Self::One,
+            Some(1) => Self::Two,
+            Some(k) => Self::Whole(k),
+            None => Self::Real,
+        }
+    }
+}
+
 /// The Bouc-Wen cell (eq 1.44, the thesis's naming):
 /// `Ḟ = α ẋ (A - (γ + β sign(ẋ) sign(F)) |F/α|^n)`, i.e. F = α z with
 /// `dz/dx = A - (γ + β s sign(z)) |z|^n`.
@@ -180,8 +195,13 @@ fn whole_power(e: f64) -> Option<u8> {
 /// - **States**: F and x_{n-1}.
 /// - **Limits**: n > 0, A > 0, β > 0, -β < γ < β (the thesis's
 ///   constraints). First order in ξ: accuracy needs ξ ≪ w_u / A.
-/// - **Cost**: n = 1 and 2: no iteration, one evaluation of f and two
-///   divisions (n = 2: and a square root). Other n: one `powf` per Newton
+/// - **Cost**: n = 1: no iteration, one evaluation of f and two
+///   divisions. n = 2: no iteration, one division and one `rsqrt` (Newton
+///   steps, no libm), the slope from the same root; about 195 guest
+///   instructions a step for a whole bushing on a Cortex-M4F
+///   (`docs/accuracy-cost.md`, `friction`, `bouc-wen/n-2`). The step
+///   dispatches once on the exponent, so each closed form runs its own
+///   straight-line code. Other n: one `powf` per Newton
 ///   iteration, none when n is a whole number up to 9 (n - 1 products
 ///   instead); 2.6 iterations a step on average for n = 1.5 and 3, 1.95
 ///   for n = 8, under a sine in f64 (the test
@@ -190,20 +210,23 @@ fn whole_power(e: f64) -> Option<u8> {
 pub struct BoucWen<T> {
     alpha: T,
     a: T,
-    beta: T,
-    gamma: T,
+    /// γ + β and γ - β, the coefficient c of f for w >= 0 and w < 0,
+    /// formed in the working type from its β and γ.
+    c_pos: T,
+    c_neg: T,
     n: T,
     n_minus_1: T,
-    /// `n - 1` when it is a whole number up to [`MAX_WHOLE_POWER`]: the
-    /// power is then that many products, not a `powf`.
-    whole_n_minus_1: Option<u8>,
+    /// How the power and the root are formed.
+    exponent: Exponent,
     /// Relative size of a Newton correction taken as converged: 1e-12, or
     /// 4 ε of the working type if that is larger (f32).
     tol: T,
     w_u: T,
     k0: T,
     inv_alpha: T,
-    alpha_over_a: T,
+    /// α / (2 A): halving is exact, so the energy is the same as with
+    /// ½ and α / A as separate factors.
+    half_alpha_over_a: T,
 }
 
 impl<T: Real> BoucWen<T> {
@@ -228,16 +251,16 @@ impl<T: Real> BoucWen<T> {
         Ok(Self {
             alpha: T::from_f64(alpha),
             a: T::from_f64(a),
-            beta: T::from_f64(beta),
-            gamma: T::from_f64(gamma),
+            c_pos: T::from_f64(gamma) + T::from_f64(beta),
+            c_neg: T::from_f64(gamma) - T::from_f64(beta),
             n: T::from_f64(n),
             n_minus_1: T::from_f64(n - 1.0),
-            whole_n_minus_1: whole_power(n - 1.0),
+            exponent: Exponent::of(n),
             tol: T::from_f64(1e-12).max(T::EPSILON * T::from_f64(4.0)),
             w_u: T::from_f64(w_u),
             k0: T::from_f64(alpha * a),
             inv_alpha: T::from_f64(1.0 / alpha),
-            alpha_over_a: T::from_f64(alpha / a),
+            half_alpha_over_a: T::from_f64(0.5 * alpha / a),
         })
     }
 
@@ -246,22 +269,32 @@ impl<T: Real> BoucWen<T> {
         self.alpha * self.w_u
     }
 
-    /// (f(w), f'(w), c = γ + β sign(w), |w|^n), with
-    /// f(w) = A - c |w|^n and f'(w) = -n c |w|^(n-1) sign(w) <= 0.
-    #[inline]
+    /// [`Self::rate_as`] with the cell's own exponent.
+    #[cfg(test)]
     fn rate(&self, w: T) -> (T, T, T, T) {
+        self.rate_as(w, self.exponent)
+    }
+
+    /// (f(w), f'(w), c = γ + β sign(w), |w|^n), with
+    /// f(w) = A - c |w|^n and f'(w) = -n c |w|^(n-1) sign(w) <= 0, for
+    /// `power` the cell's exponent (a constant where the step has
+    /// dispatched on it, so that each exponent gets its own code).
+    #[inline(always)]
+    fn rate_as(&self, w: T, power: Exponent) -> (T, T, T, T) {
         let aw = w.abs();
         let (c, c_sign) = if w < T::ZERO {
-            (self.gamma - self.beta, -(self.gamma - self.beta))
+            (self.c_neg, -self.c_neg)
         } else {
-            (self.gamma + self.beta, self.gamma + self.beta)
+            (self.c_pos, self.c_pos)
         };
         if aw == T::ZERO {
             return (self.a, T::ZERO, c, T::ZERO);
         }
-        let pow_n1 = match self.whole_n_minus_1 {
-            Some(k) => (0..k).fold(T::ONE, |p, _| p * aw),
-            None => aw.powf(self.n_minus_1),
+        let pow_n1 = match power {
+            Exponent::One => T::ONE,
+            Exponent::Two => aw,
+            Exponent::Whole(k) => (0..k).fold(T::ONE, |p, _| p * aw),
+            Exponent::Real => aw.powf(self.n_minus_1),
         };
         let pow_n = pow_n1 * aw;
         (self.a - c * pow_n, -self.n * c_sign * pow_n1, c, pow_n)
@@ -272,27 +305,35 @@ impl<T: Real> BoucWen<T> {
     fn rest_slope(&self) -> T {
         self.k0
     }
+    /// [`Self::solve_as`] with the cell's own exponent.
+    #[cfg(test)]
+    fn solve(&self, w0: T, xi: T, f0: T) -> (T, T, u32) {
+        self.solve_as(w0, xi, f0, self.exponent)
+    }
+
     /// The backward-Euler root `w` of `g(w) = w - w0 - ξ f(w)` from `w0`
     /// (where `f(w0) = f0`), the slope `f(w) / g'(w)`, and the iterations
-    /// taken. Newton steps inside the bracket between w0 and w_u (its ends
-    /// included), bisection when a step leaves it; done when a Newton
-    /// correction is within `tol (1 + |w|)` or the bracket is that narrow.
+    /// taken, for `power` as in [`Self::rate_as`]. Newton steps inside the
+    /// bracket between w0 and w_u (its ends included), bisection when a
+    /// step leaves it; done when a Newton correction is within
+    /// `tol (1 + |w|)` or the bracket is that narrow.
     #[inline(always)]
-    fn solve(&self, w0: T, xi: T, f0: T) -> (T, T, u32) {
+    fn solve_as(&self, w0: T, xi: T, f0: T, power: Exponent) -> (T, T, u32) {
         let (mut lo, mut hi) = if w0 < self.w_u {
             (w0, self.w_u)
         } else {
             (self.w_u, w0)
         };
-        if let Some(k @ (0 | 1)) = self.whole_n_minus_1 {
-            return self.solve_exact(w0, xi, (lo, hi), k == 1);
+        if let Exponent::One | Exponent::Two = power {
+            let (w, slope_w, _, _) = self.solve_exact(w0, xi, (lo, hi), power == Exponent::Two);
+            return (w, slope_w, 1);
         }
         let mut w = clamp(w0 + xi * f0, lo, hi);
         let mut slope_w = T::ZERO;
         let mut iterations = 0;
         while iterations < MAX_ITERATIONS {
             iterations += 1;
-            let (f, df, _, _) = self.rate(w);
+            let (f, df, _, _) = self.rate_as(w, power);
             let g = w - w0 - xi * f;
             let dg = T::ONE - xi * df; // >= 1
             slope_w = f / dg;
@@ -325,50 +366,100 @@ impl<T: Real> BoucWen<T> {
     }
 
     /// [`Self::solve`] for n = 1 (`squared` false) and n = 2, in closed
-    /// form. With b = w0 + ξ A, g(0) = -b and g increasing: the root has
-    /// the sign of b, and on that side f(w) = A - k w for n = 1, A - k w|w|
-    /// for n = 2, with k = β + γ (b >= 0) or β - γ (b < 0), both positive.
-    /// Then `w = b / (1 + ξ k)`, or `2 b / (1 + sqrt(1 + 4 ξ k |b|))`, the
-    /// root of `ξ k w|w| + w - b = 0` written without cancellation, its
-    /// square root as `u · rsqrt(u)` (within 3e-7 in `f32`, no libm call).
-    /// One evaluation of f, kept in the bracket against rounding.
+    /// form, also returning c and |w|^n at the root (as [`Self::rate`]).
+    /// With b = w0 + ξ A, g(0) = -b and g increasing: the root has the sign
+    /// of b, and on that side f(w) = A - k w for n = 1, A - k w|w| for
+    /// n = 2, with k = β + γ (b >= 0) or β - γ (b < 0), both positive.
+    /// - n = 1: `w = b / (1 + ξ k)`, and the slope f(w) / g'(w) by
+    ///   [`Self::rate`].
+    /// - n = 2: `w = 2 b / (1 + r)` with `r = sqrt(u)`, `u = 1 + 4 ξ k |b|`,
+    ///   the root of `ξ k w|w| + w - b = 0` written without cancellation.
+    ///   There g'(w) = 1 + 2 ξ k |w| = r exactly, so the slope is
+    ///   f(w) / r = f(w) · rsqrt(u), with r = u · rsqrt(u) (within 3e-7 in
+    ///   `f32`, no libm call, no second division). The root is clamped to
+    ///   the bracket against rounding (it then moves by a rounding error,
+    ///   and g'(w) = r still holds to that). Beyond the guard, where the
+    ///   Newton steps of `rsqrt` would overflow, r is libm's square root
+    ///   and the slope f(w) / g'(w), as for other n.
     #[inline(always)]
-    fn solve_exact(&self, w0: T, xi: T, (lo, hi): (T, T), squared: bool) -> (T, T, u32) {
+    fn solve_exact(&self, w0: T, xi: T, (lo, hi): (T, T), squared: bool) -> (T, T, T, T) {
         let b = w0 + xi * self.a;
-        let k = if b < T::ZERO {
-            self.beta - self.gamma
-        } else {
-            self.beta + self.gamma
-        };
-        let w = if squared {
+        // c of f on the root's side (the root, clamped or not, has the
+        // sign of b: the bracket reaches past zero only towards w_u > 0),
+        // and k = |c|.
+        let c = if b < T::ZERO { self.c_neg } else { self.c_pos };
+        let k = c.abs();
+        if squared {
             let q = xi * k * b.abs();
             let u = T::ONE + ((q + q) + (q + q));
-            // √u as u/√u (u >= 1 is normal; `rsqrt` takes no libm call),
-            // by libm beyond the guard, where the Newton steps would
-            // overflow.
-            let root = if u < T::GUARD { u * rsqrt(u) } else { u.sqrt() };
-            (b + b) / (T::ONE + root)
+            if u < T::GUARD {
+                let inverse = rsqrt(u);
+                let w = clamp((b + b) / (T::ONE + u * inverse), lo, hi);
+                // f(w) = A - c |w|²: what `rate` gives, without its
+                // branches.
+                let p = w * w;
+                return (w, (self.a - c * p) * inverse, c, p);
+            }
+            let w = (b + b) / (T::ONE + u.sqrt());
+            self.slope_at(clamp(w, lo, hi), xi, Exponent::Two)
         } else {
-            b / (T::ONE + xi * k)
-        };
-        let w = clamp(w, lo, hi);
-        let (f, df, _, _) = self.rate(w);
-        (w, f / (T::ONE - xi * df), 1)
+            self.slope_at(clamp(b / (T::ONE + xi * k), lo, hi), xi, Exponent::One)
+        }
+    }
+
+    /// `(w, f(w) / g'(w), c, |w|^n)` at a root w.
+    #[inline(always)]
+    fn slope_at(&self, w: T, xi: T, power: Exponent) -> (T, T, T, T) {
+        let (f, df, c, p) = self.rate_as(w, power);
+        (w, f / (T::ONE - xi * df), c, p)
+    }
+
+    /// The root from `w0` (where `f(w0) = f0`), its slope, and c and
+    /// |w|^n there.
+    #[inline(always)]
+    fn root(&self, w0: T, xi: T, f0: T, power: Exponent) -> (T, T, T, T) {
+        if let Exponent::One | Exponent::Two = power {
+            let bracket = if w0 < self.w_u {
+                (w0, self.w_u)
+            } else {
+                (self.w_u, w0)
+            };
+            return self.solve_exact(w0, xi, bracket, power == Exponent::Two);
+        }
+        let (w, slope_w, _) = self.solve_as(w0, xi, f0, power);
+        let (_, _, c, p) = self.rate_as(w, power);
+        (w, slope_w, c, p)
     }
 
     /// One step of travel `xi` in direction `s`.
     #[inline(always)]
     fn advance(&self, st: &mut CellState<T>, drive: &Drive<T>, s: T, xi: T) -> EffectOutput<T> {
+        // One dispatch on the exponent; each closed form gets its own code.
+        match self.exponent {
+            Exponent::Two => self.advance_as(st, drive, s, xi, Exponent::Two),
+            Exponent::One => self.advance_as(st, drive, s, xi, Exponent::One),
+            power => self.advance_as(st, drive, s, xi, power),
+        }
+    }
+
+    /// [`Self::advance`] with the exponent given.
+    #[inline(always)]
+    fn advance_as(
+        &self,
+        st: &mut CellState<T>,
+        drive: &Drive<T>,
+        s: T,
+        xi: T,
+        power: Exponent,
+    ) -> EffectOutput<T> {
         let w0 = s * st.force * self.inv_alpha;
-        let (f0, _, c0, p0) = self.rate(w0);
-        let (w, slope_w, _) = self.solve(w0, xi, f0);
-        let (_, _, c1, p1) = self.rate(w);
+        let (f0, _, c0, p0) = self.rate_as(w0, power);
+        let (w, slope_w, c1, p1) = self.root(w0, xi, f0, power);
         let force = s * self.alpha * w;
         let slope = self.alpha * slope_w;
         // P = (α / A) |ẋ| w c |w|^n >= 0 (w and c have the same sign).
         let density = |w: T, c: T, p: T| w * c * p;
-        let dissipated =
-            T::HALF * xi * self.alpha_over_a * (density(w0, c0, p0) + density(w, c1, p1));
+        let dissipated = xi * self.half_alpha_over_a * (density(w0, c0, p0) + density(w, c1, p1));
         st.commit(drive.x, force, slope, dissipated)
     }
 }
@@ -474,15 +565,17 @@ macro_rules! single_cell_effect {
             }
             #[inline]
             fn step(&self, st: &mut CellState<T>, drive: &Drive<T>) -> EffectOutput<T> {
+                // x is within the guard and so is the last x: dx is a
+                // number, zero or of a sign.
                 let dx = drive.x - st.x;
-                let s = direction(dx);
-                if s == T::ZERO {
+                if dx == T::ZERO {
                     return EffectOutput {
                         force: st.force,
                         tangent: st.slope,
                         dissipated: T::ZERO,
                     };
                 }
+                let s = if dx > T::ZERO { T::ONE } else { -T::ONE };
                 self.advance(st, drive, s, dx.abs())
             }
             #[inline(always)]
@@ -667,7 +760,7 @@ mod tests {
         for k in 1..=steps {
             let x = T::from_f64(0.6 * libm::sin(core::f64::consts::TAU * k as f64 / 600.0));
             let dx = x - st.x;
-            let s = direction(dx);
+            let s = if dx < T::ZERO { -T::ONE } else { T::ONE };
             let (w0, xi) = (s * st.force * bw.inv_alpha, dx.abs());
             let (f0, ..) = bw.rate(w0);
             let (w, _, it) = bw.solve(w0, xi, f0);
@@ -730,7 +823,7 @@ mod tests {
         for n in [1.0, 2.0] {
             let exact = BoucWen::<f64>::new(50.0, 1.0, 5.0, 2.0, n).unwrap();
             let mut newton = exact;
-            newton.whole_n_minus_1 = None;
+            newton.exponent = Exponent::Real;
             for w0 in [-0.6, -0.1, 0.0, 0.05, 0.4] {
                 for xi in [1e-6, 1e-3, 0.1, 10.0] {
                     let (f0, ..) = exact.rate(w0);

@@ -44,8 +44,8 @@
 //!
 //! **States**: the six axes' [`BushingState`]s, the last loads and the
 //! fault flags of the kinematics. A configuration that is not usable (a
-//! non-finite or huge position, an orientation that is not a unit
-//! quaternion within 1e-3) is refused as a 1D law refuses an input: the
+//! non-finite position or one beyond a quarter of the guard, an orientation
+//! that is not a unit quaternion within 1e-3) is refused as a 1D law refuses an input: the
 //! axes keep their states, the last loads are returned and a flag is
 //! raised ([`SixDof::step`]).
 //!
@@ -61,22 +61,29 @@
 //! differences of [`SixDof::trial`] to 2e-10 of its largest entry after a
 //! loaded history, at rotations of a radian and of a few hundredths.
 //!
-//! **Cost**: six 1D steps plus the kinematics: three quaternion products,
-//! about ten vector rotations and cross products, one square root, one
-//! `atan2` and two divisions (guarded: |v| > 0, 1 + w ≥ 1), and the checks
-//! of the configuration. One engine mount (six axes of a polynomial, 2
-//! Maxwell and 3 Jenkins cells) costs 1 802 guest instructions per step on
-//! a Cortex-M4F attached and 1 927 invariant, call included
+//! **Cost**: six 1D steps plus the kinematics: three quaternion products
+//! (two in the attached form), one quaternion made a matrix for the three
+//! rotations into and out of the bushing frame, three quaternion rotations,
+//! four cross products, one `atan2` and two `rsqrt` (Newton steps, no
+//! division and no libm square root; |v|² below the smallest normal number
+//! takes θ = 2v), and the checks of the configuration: two unit
+//! quaternions, two positions and six local strains. One engine mount (six
+//! axes of a polynomial, 2 Maxwell and 3 Jenkins cells) costs 1 672 guest
+//! instructions per step on a Cortex-M4F attached and 1 788 invariant, net
+//! of the call, on its worst input, band-limited noise
 //! (`docs/accuracy-cost.md`, family `six-dof`). The tangent is formed on
 //! request, not in the step.
 
 use crate::backbone::Backbone;
 use crate::bushing::{Bushing, BushingState, Effect};
-use crate::error::{Faults, Param, ParamError, finite};
-use crate::real::Real;
+use crate::error::{Faults, Param, ParamError, in_range};
+use crate::real::{Real, min_positive, rsqrt};
 
 /// A vector of three components.
 pub type Vec3<T> = [T; 3];
+
+/// A 3×3 matrix, by rows.
+pub type Mat3<T> = [Vec3<T>; 3];
 
 /// A unit quaternion w + v (Hamilton's convention): the active rotation
 /// that turns vectors of a node frame into the global frame.
@@ -116,6 +123,16 @@ fn cross<T: Real>(a: Vec3<T>, b: Vec3<T>) -> Vec3<T> {
     ]
 }
 
+/// M u.
+fn mul_vec<T: Real>(m: &Mat3<T>, u: Vec3<T>) -> Vec3<T> {
+    [dot(m[0], u), dot(m[1], u), dot(m[2], u)]
+}
+
+/// Mᵀ u.
+fn mul_t_vec<T: Real>(m: &Mat3<T>, u: Vec3<T>) -> Vec3<T> {
+    add(add(scale(m[0], u[0]), scale(m[1], u[1])), scale(m[2], u[2]))
+}
+
 impl<T: Real> Quat<T> {
     /// No rotation.
     pub fn identity() -> Self {
@@ -145,6 +162,18 @@ impl<T: Real> Quat<T> {
         }
     }
 
+    /// `self* ⊗ other`: the rotation from `self` to `other`, in the frame
+    /// of `self`.
+    pub fn conj_mul(self, other: Self) -> Self {
+        Self {
+            w: self.w * other.w + dot(self.v, other.v),
+            v: sub(
+                sub(scale(other.v, self.w), scale(self.v, other.w)),
+                cross(self.v, other.v),
+            ),
+        }
+    }
+
     /// The conjugate: the inverse rotation.
     pub fn conj(self) -> Self {
         Self {
@@ -164,6 +193,22 @@ impl<T: Real> Quat<T> {
     /// Rᵀ u: a global vector in the node frame.
     pub fn rotate_back(self, u: Vec3<T>) -> Vec3<T> {
         self.conj().rotate(u)
+    }
+
+    /// R as a matrix: the linear map of [`Quat::rotate`],
+    /// (1 - 2|v|²) I + 2 v vᵀ + 2 w [v]×, formed with 24 operations, so
+    /// that each rotation by it takes 15 against the 30 of `rotate`.
+    pub fn matrix(self) -> Mat3<T> {
+        let ([x, y, z], w) = (self.v, self.w);
+        let (x2, y2, z2) = (x + x, y + y, z + z);
+        let (xx, yy, zz) = (x * x2, y * y2, z * z2);
+        let (xy, xz, yz) = (x * y2, x * z2, y * z2);
+        let (wx, wy, wz) = (w * x2, w * y2, w * z2);
+        [
+            [T::ONE - (yy + zz), xy - wz, xz + wy],
+            [xy + wz, T::ONE - (xx + zz), yz - wx],
+            [xz - wy, yz + wx, T::ONE - (xx + yy)],
+        ]
     }
 }
 
@@ -266,6 +311,8 @@ impl<T: Real, S> SixDofState<T, S> {
 struct Kinematics<T> {
     strain: [T; 6],
     frame: Quat<T>,
+    /// The bushing frame as a matrix (local to global).
+    axes: Mat3<T>,
     /// Node 1's orientation and the relative rotation q₁* ⊗ q₂ (w >= 0).
     q1: Quat<T>,
     rel: Quat<T>,
@@ -279,33 +326,31 @@ struct Kinematics<T> {
     half: Vec3<T>,
     /// Both orientations are unit quaternions within 1e-3.
     rotations: bool,
+    /// Both positions are within a quarter of the guard.
+    positions: bool,
 }
 
 impl<T: Real> Kinematics<T> {
-    /// Every quantity the loads are formed from.
-    fn values(&self) -> impl Iterator<Item = T> + '_ {
-        self.strain
-            .iter()
-            .chain(&self.d1)
-            .chain(&self.d2)
-            .chain(&self.d)
-            .chain(&self.half)
-            .chain(&self.frame.v)
-            .chain(core::iter::once(&self.frame.w))
-            .copied()
-    }
-
-    /// All finite.
-    fn finite(&self) -> bool {
-        self.values().all(T::is_finite)
-    }
-
-    /// Both orientations are rotations and every value is within GUARD
-    /// (so that no product of two of them, nor a force of the axes times an
-    /// arm, overflows): NaN fails.
+    /// Both orientations are rotations, both positions within a quarter of
+    /// [`Real::GUARD`] and the local strains within it: with offsets
+    /// within a sixteenth of the guard (checked by [`SixDof::new`]), every
+    /// other value the loads are formed from (the arms, d, the mid-frame
+    /// terms) is then within the guard as well, so that no product of two
+    /// of them, nor a force of the axes times an arm, overflows. NaN fails.
     fn usable(&self) -> bool {
-        self.rotations && self.values().all(|x| x.abs() <= T::GUARD)
+        self.rotations && self.positions && self.strain.iter().all(|x| x.abs() <= T::GUARD)
     }
+}
+
+/// The positions and orientations of both nodes are finite.
+fn finite_poses<T: Real>(node1: &Pose<T>, node2: &Pose<T>) -> bool {
+    [node1, node2].iter().all(|n| {
+        n.position
+            .iter()
+            .chain(&n.orientation.v)
+            .chain(core::iter::once(&n.orientation.w))
+            .all(|x| x.is_finite())
+    })
 }
 
 /// A 6-DOF bushing: six 1D laws, two attachment points and a
@@ -320,8 +365,9 @@ pub struct SixDof<T, B, E> {
 impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
     /// Joins the six axis laws (translations x, y, z in length units, then
     /// rotations x, y, z in rad) attached at `offsets` (node-frame points of
-    /// node 1 and node 2). Refuses non-finite offsets (`offset[i]`, i the
-    /// node and component as 3·node + component).
+    /// node 1 and node 2). Refuses an offset component that is not finite
+    /// or is beyond a sixteenth of [`Real::GUARD`] (`offset[i]`, i the node
+    /// and component as 3·node + component).
     pub fn new(
         axes: [Bushing<T, B, E>; 6],
         offsets: [[f64; 3]; 2],
@@ -330,7 +376,9 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
         let mut stored = [[T::ZERO; 3]; 2];
         for (n, (out, given)) in stored.iter_mut().zip(offsets).enumerate() {
             for (c, (o, g)) in out.iter_mut().zip(given).enumerate() {
-                *o = T::from_f64(finite(Param::item("offset", 3 * n + c), g)?);
+                let bound = T::GUARD.to_f64() / 16.0;
+                let param = Param::item("offset", 3 * n + c);
+                *o = T::from_f64(in_range(param, g, -bound, false, bound)?);
             }
         }
         Ok(Self {
@@ -375,6 +423,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
         state
     }
 
+    #[inline(always)]
     fn kinematics(&self, node1: &Pose<T>, node2: &Pose<T>) -> Kinematics<T> {
         let two = T::ONE + T::ONE;
         let (q1, q2) = (node1.orientation, node2.orientation);
@@ -382,23 +431,32 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
         let tolerance = T::from_f64(1e-3);
         let unit = |q: Quat<T>| (q.w * q.w + dot(q.v, q.v) - T::ONE).abs() <= tolerance;
         let rotations = unit(q1) && unit(q2);
+        let quarter = T::GUARD * T::HALF * T::HALF;
+        let positions = node1
+            .position
+            .iter()
+            .chain(&node2.position)
+            .all(|x| x.abs() <= quarter);
         // Relative rotation, node-1 components; the shortest arc.
-        let mut q = q1.conj() * q2;
+        let mut q = q1.conj_mul(q2);
         if q.w < T::ZERO {
             q = Quat {
                 w: -q.w,
                 v: neg(q.v),
             };
         }
-        let s = dot(q.v, q.v).sqrt();
-        // θ = 2 atan2(|v|, w) v/|v| (2v at |v| = 0).
-        let k = if s > T::ZERO {
-            two * s.atan2(q.w) / s
+        // θ = 2 atan2(|v|, w) v/|v|, with 1/|v| from `rsqrt` (no division,
+        // no libm square root); 2v, and |θ| counted as zero, where |v|² is
+        // not a normal number (|θ| < 3e-19 in f32).
+        let s2 = dot(q.v, q.v);
+        let (k, angle) = if s2 > min_positive::<T>() {
+            let inverse = rsqrt(s2);
+            let angle = two * (s2 * inverse).atan2(q.w);
+            (angle * inverse, angle)
         } else {
-            two
+            (two, T::ZERO)
         };
         let theta = scale(q.v, k);
-        let angle = k * s;
         let [o1, o2] = self.offsets;
         let d1 = q1.rotate(o1);
         let d2 = q2.rotate(o2);
@@ -406,25 +464,27 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
         let (frame, half) = match self.connectivity {
             Connectivity::Attached => (q1, [T::ZERO; 3]),
             Connectivity::Invariant => {
-                // R̃ = exp(½θ×): (1 + w, v)/√(2(1 + w)); 1 + w >= 1.
-                let r2 = T::ONE / (two * (T::ONE + q.w));
-                let r = r2.sqrt();
+                // R̃ = exp(½θ×) = (1 + w, v) r with r = 1/√(2(1 + w)),
+                // 1 + w >= 1; t = v/(1 + w) = 2 r² v.
+                let r = rsqrt(two * (T::ONE + q.w));
                 let tilde = Quat {
                     w: (T::ONE + q.w) * r,
                     v: scale(q.v, r),
                 };
-                // t = v/(1 + w) = 2 r² v.
-                (q1 * tilde, q1.rotate(scale(q.v, two * r2)))
+                (q1 * tilde, q1.rotate(scale(q.v, two * r * r)))
             }
         };
-        let local = frame.rotate_back(d);
+        let axes = frame.matrix();
+        let local = mul_t_vec(&axes, d);
         Kinematics {
             strain: [local[0], local[1], local[2], theta[0], theta[1], theta[2]],
             frame,
+            axes,
             q1,
             rel: q,
             angle,
             rotations,
+            positions,
             d1,
             d2,
             d,
@@ -433,11 +493,11 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
     }
 
     /// One step to the configuration (node 1, node 2). A configuration
-    /// whose kinematics are not finite or leave [`Real::GUARD`] (a NaN or
-    /// huge position), or whose orientations are not unit quaternions
-    /// within 1e-3, is refused: the
-    /// axes keep their states, the last loads are returned with no
-    /// dissipation, and [`Faults::NON_FINITE_INPUT`] or
+    /// with a position that is not finite or is beyond a quarter of
+    /// [`Real::GUARD`], a local strain beyond the guard, or an orientation
+    /// that is not a unit quaternion within 1e-3, is refused: the axes keep
+    /// their states, the last loads are returned with no dissipation, and
+    /// [`Faults::NON_FINITE_INPUT`] (a NaN or infinite input) or
     /// [`Faults::OUT_OF_RANGE`] is raised in the state.
     pub fn step(
         &self,
@@ -447,7 +507,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
     ) -> SixDofOutput<T> {
         let k = self.kinematics(node1, node2);
         if !k.usable() {
-            state.faults.raise(if k.finite() {
+            state.faults.raise(if finite_poses(node1, node2) {
                 Faults::OUT_OF_RANGE
             } else {
                 Faults::NON_FINITE_INPUT
@@ -489,9 +549,10 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
     }
 
     /// The node loads of the local loads `local` (F̄, M̄) at `k`.
+    #[inline(always)]
     fn loads(&self, k: &Kinematics<T>, local: &[T; 6]) -> Loads<T> {
-        let force = k.frame.rotate([local[0], local[1], local[2]]);
-        let moment = k.frame.rotate([local[3], local[4], local[5]]);
+        let force = mul_vec(&k.axes, [local[0], local[1], local[2]]);
+        let moment = mul_vec(&k.axes, [local[3], local[4], local[5]]);
         match self.connectivity {
             Connectivity::Attached => Loads {
                 force: [force, neg(force)],

@@ -16,11 +16,10 @@
 //! and the moments of the module docs are differentiated term by term.
 //! Below φ = 0.1 the ratios use their series (the closed forms cancel).
 
-use super::{Connectivity, Kinematics, SixDofOutput, Vec3, add, cross, dot, scale, sub};
+use super::{Connectivity, Kinematics, Mat3, SixDofOutput, Vec3, add, cross, dot, scale, sub};
 use crate::real::Real;
 
 /// A 3×3 matrix by rows.
-type Mat3<T> = [Vec3<T>; 3];
 /// The variation of a 3-vector: 3 rows of 12 (δx₁, a, δx₂, b).
 type Jac<T> = [[T; 12]; 3];
 
@@ -65,16 +64,6 @@ fn diag<T: Real>(d: Vec3<T>) -> Mat3<T> {
 
 fn identity<T: Real>() -> Mat3<T> {
     diag([T::ONE; 3])
-}
-
-/// The rotation matrix of a unit quaternion.
-fn rotation<T: Real>(q: super::Quat<T>) -> Mat3<T> {
-    let (o, z) = (T::ONE, T::ZERO);
-    transpose([
-        q.rotate([o, z, z]),
-        q.rotate([z, o, z]),
-        q.rotate([z, z, o]),
-    ])
 }
 
 /// The outer product u vᵀ.
@@ -167,10 +156,10 @@ pub(super) fn tangent<T: Real>(
 ) -> [[T; 12]; 12] {
     let l = out.local;
     let t = out.tangent;
-    let force = k.frame.rotate([l[0], l[1], l[2]]);
-    let moment = k.frame.rotate([l[3], l[4], l[5]]);
-    let rb = rotation(k.frame);
-    let r1 = rotation(k.q1);
+    let rb = k.axes;
+    let force = super::mul_vec(&rb, [l[0], l[1], l[2]]);
+    let moment = super::mul_vec(&rb, [l[3], l[4], l[5]]);
+    let r1 = k.q1.matrix();
     let (gamma_inv, t_prime) = rotation_jacobians(k);
     let (u1, a, u2, b) = (unit(0), unit(1), unit(2), unit(3));
     let rel = jac_sub(&b, &a);

@@ -338,3 +338,41 @@ fn unusable_configurations_are_refused_and_the_loads_held() {
     let (a2, b2) = poses(31);
     assert!(b.step(&mut s, &a2, &b2).loads.force[0][0].is_finite());
 }
+
+#[test]
+fn offsets_and_positions_beyond_their_share_of_the_guard_are_refused() {
+    // An offset component is refused beyond a sixteenth of the guard (in
+    // the working type), naming its node and component.
+    let g = <f64 as Real>::GUARD;
+    let far = SixDof::new(
+        anisotropic(),
+        [OFFSET_A, [0.0, 0.0, -1.01 * g / 16.0]],
+        Connectivity::Invariant,
+    );
+    match far {
+        Err(ParamError::OutOfRange { param, max, .. }) => {
+            assert_eq!(param, Param::item("offset", 5));
+            assert_eq!(max, g / 16.0);
+        }
+        other => panic!("{other:?}"),
+    }
+    let near = [OFFSET_A, [0.0, 0.0, -0.99 * g / 16.0]];
+    assert!(SixDof::new(anisotropic(), near, Connectivity::Invariant).is_ok());
+    // A position beyond a quarter of the guard is refused as out of range
+    // (not as a NaN); both nodes just within it are taken.
+    let b = SixDof::new(anisotropic(), [OFFSET_A, OFFSET_B], Connectivity::Attached).unwrap();
+    let (a0, b0) = poses(0);
+    let mut s = b.state_at(&a0, &b0);
+    let held = s.loads();
+    let mut beyond = b0;
+    beyond.position[2] = 1.01 * g / 4.0;
+    assert_eq!(b.step(&mut s, &a0, &beyond).loads, held);
+    assert!(s.faults().contains(Faults::OUT_OF_RANGE));
+    assert!(!s.faults().contains(Faults::NON_FINITE_INPUT));
+    s.clear_faults();
+    let (mut near1, mut near2) = (a0, b0);
+    near1.position[2] = 0.99 * g / 4.0;
+    near2.position[2] = 0.99 * g / 4.0;
+    b.step(&mut s, &near1, &near2);
+    assert!(s.faults().is_empty(), "{:?}", s.faults());
+}
