@@ -215,16 +215,23 @@ pub fn step_clamp<T: Real>(
     // on while the motion goes on the same way. A reversal, or a
     // standstill (where a held cell sticks, for the tangent), visits every
     // cell again.
-    if df * held.force <= T::ZERO {
-        *held = Held::default();
-    }
-    let first = held.cells;
+    let run = if df * held.force <= T::ZERO {
+        Held::default()
+    } else {
+        *held
+    };
+    let first = run.cells;
     let mut sweep = Sweep {
-        force: held.force,
-        slip: held.limit * df.abs(),
+        force: run.force,
+        // No product by the zero limit of an empty run.
+        slip: if first == 0 {
+            T::ZERO
+        } else {
+            run.limit * df.abs()
+        },
         sticking: T::ZERO,
         contiguous: true,
-        held: *held,
+        held: run,
     };
     if first == 0 {
         // Every cell: a loop of known length, unrolled for small banks.

@@ -403,24 +403,29 @@ fn advance_rate<T: Real, A: Accumulator<T>, const ENERGY: bool>(
     drive: &Drive<T>,
 ) -> (T, T) {
     let df = drive.df_inf;
-    let mut squares = T::ZERO;
-    let mut cell = |c: &MaxwellCell<T>, s: &mut A| {
+    // The branch force and its loss c F_old² + c F_new² (zero without
+    // `ENERGY`).
+    let cell = |c: &MaxwellCell<T>, s: &mut A| {
         let old = s.value();
         s.relax(c.keep, c.decay, c.rate_gain * df);
         let new = s.value();
-        if ENERGY {
-            squares += c.loss * (old * old + new * new);
-        }
-        new
+        let square = if ENERGY {
+            c.loss * (old * old + new * new)
+        } else {
+            T::ZERO
+        };
+        (new, square)
     };
-    // The first cell starts the sum (one addition of zero fewer).
-    let mut force = T::ZERO;
+    // The first cell starts both sums (one addition of zero fewer each).
+    let (mut force, mut squares) = (T::ZERO, T::ZERO);
     let mut pairs = cells.iter().zip(states.iter_mut());
     if let Some((c, s)) = pairs.next() {
-        force = cell(c, s);
+        (force, squares) = cell(c, s);
     }
     for (c, s) in pairs {
-        force += cell(c, s);
+        let (f, q) = cell(c, s);
+        force += f;
+        squares += q;
     }
     (force, squares)
 }

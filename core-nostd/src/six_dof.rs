@@ -62,17 +62,17 @@
 //! loaded history, at rotations of a radian and of a few hundredths.
 //!
 //! **Cost**: six 1D steps plus the kinematics: three quaternion products
-//! (two in the attached form), one quaternion made a matrix for the three
-//! rotations into and out of the bushing frame, three quaternion rotations,
-//! four cross products, one `atan2` and two `rsqrt` (Newton steps, no
-//! division and no libm square root; |v|² below the smallest normal number
-//! takes θ = 2v), and the checks of the configuration: two unit
-//! quaternions, two positions and six local strains. One engine mount (six
-//! axes of a polynomial, 2 Maxwell and 3 Jenkins cells) costs 1 672 guest
-//! instructions per step on a Cortex-M4F attached and 1 788 invariant, net
-//! of the call, on its worst input, band-limited noise
-//! (`docs/accuracy-cost.md`, family `six-dof`). The tangent is formed on
-//! request, not in the step.
+//! (two in the attached form), one quaternion made a matrix for the four
+//! rotations into and out of the bushing frame (three attached), two
+//! quaternion rotations, four cross products (two attached), one `atan2`
+//! and two `rsqrt` (one attached; Newton steps, no division and no libm
+//! square root; |v|² below the smallest normal number takes θ = 2v), and
+//! the checks of the configuration: two unit quaternions, two positions
+//! and six local strains. One engine mount (six axes of a polynomial, 2
+//! Maxwell and 3 Jenkins cells) costs 1 662 guest instructions per step on
+//! a Cortex-M4F attached and 1 765 invariant, net of the call, on its
+//! worst input, band-limited noise (`docs/accuracy-cost.md`, family
+//! `six-dof`). The tangent is formed on request, not in the step.
 
 use crate::backbone::Backbone;
 use crate::bushing::{Bushing, BushingState, Effect};
@@ -461,20 +461,22 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
         let d1 = q1.rotate(o1);
         let d2 = q2.rotate(o2);
         let d = sub(add(node2.position, d2), add(node1.position, d1));
-        let (frame, half) = match self.connectivity {
-            Connectivity::Attached => (q1, [T::ZERO; 3]),
+        let (frame, axes, half) = match self.connectivity {
+            Connectivity::Attached => (q1, q1.matrix(), [T::ZERO; 3]),
             Connectivity::Invariant => {
                 // R̃ = exp(½θ×) = (1 + w, v) r with r = 1/√(2(1 + w)),
-                // 1 + w >= 1; t = v/(1 + w) = 2 r² v.
+                // 1 + w >= 1; t = v/(1 + w) = 2 r² v. t lies on R̃'s axis,
+                // so R₁t = R₁R̃t = R̂t: the mid frame's matrix turns it.
                 let r = rsqrt(two * (T::ONE + q.w));
                 let tilde = Quat {
                     w: (T::ONE + q.w) * r,
                     v: scale(q.v, r),
                 };
-                (q1 * tilde, q1.rotate(scale(q.v, two * r * r)))
+                let frame = q1 * tilde;
+                let axes = frame.matrix();
+                (frame, axes, mul_vec(&axes, scale(q.v, two * r * r)))
             }
         };
-        let axes = frame.matrix();
         let local = mul_t_vec(&axes, d);
         Kinematics {
             strain: [local[0], local[1], local[2], theta[0], theta[1], theta[2]],
