@@ -305,6 +305,16 @@ impl<T: Real> BoucWen<T> {
     fn rest_slope(&self) -> T {
         self.k0
     }
+    /// The root's bracket from `w0`: between it and w_u, ends included.
+    #[inline(always)]
+    fn bracket(&self, w0: T) -> (T, T) {
+        if w0 < self.w_u {
+            (w0, self.w_u)
+        } else {
+            (self.w_u, w0)
+        }
+    }
+
     /// [`Self::solve_as`] with the cell's own exponent.
     #[cfg(test)]
     fn solve(&self, w0: T, xi: T, f0: T) -> (T, T, u32) {
@@ -319,11 +329,7 @@ impl<T: Real> BoucWen<T> {
     /// `tol (1 + |w|)` or the bracket is that narrow.
     #[inline(always)]
     fn solve_as(&self, w0: T, xi: T, f0: T, power: Exponent) -> (T, T, u32) {
-        let (mut lo, mut hi) = if w0 < self.w_u {
-            (w0, self.w_u)
-        } else {
-            (self.w_u, w0)
-        };
+        let (mut lo, mut hi) = self.bracket(w0);
         if let Exponent::One | Exponent::Two = power {
             let (w, slope_w, _, _) = self.solve_exact(w0, xi, (lo, hi), power == Exponent::Two);
             return (w, slope_w, 1);
@@ -365,13 +371,13 @@ impl<T: Real> BoucWen<T> {
         (w, slope_w, iterations)
     }
 
-    /// [`Self::solve`] for n = 1 (`squared` false) and n = 2, in closed
-    /// form, also returning c and |w|^n at the root (as [`Self::rate`]).
+    /// [`Self::solve_as`] for n = 1 (`squared` false) and n = 2, in closed
+    /// form, also returning c and |w|^n at the root (as [`Self::rate_as`]).
     /// With b = w0 + ξ A, g(0) = -b and g increasing: the root has the sign
     /// of b, and on that side f(w) = A - k w for n = 1, A - k w|w| for
     /// n = 2, with k = β + γ (b >= 0) or β - γ (b < 0), both positive.
     /// - n = 1: `w = b / (1 + ξ k)`, and the slope f(w) / g'(w) by
-    ///   [`Self::rate`].
+    ///   [`Self::rate_as`].
     /// - n = 2: `w = 2 b / (1 + r)` with `r = sqrt(u)`, `u = 1 + 4 ξ k |b|`,
     ///   the root of `ξ k w|w| + w - b = 0` written without cancellation.
     ///   There g'(w) = 1 + 2 ξ k |w| = r exactly, so the slope is
@@ -419,12 +425,7 @@ impl<T: Real> BoucWen<T> {
     #[inline(always)]
     fn root(&self, w0: T, xi: T, f0: T, power: Exponent) -> (T, T, T, T) {
         if let Exponent::One | Exponent::Two = power {
-            let bracket = if w0 < self.w_u {
-                (w0, self.w_u)
-            } else {
-                (self.w_u, w0)
-            };
-            return self.solve_exact(w0, xi, bracket, power == Exponent::Two);
+            return self.solve_exact(w0, xi, self.bracket(w0), power == Exponent::Two);
         }
         let (w, slope_w, _) = self.solve_as(w0, xi, f0, power);
         let (_, _, c, p) = self.rate_as(w, power);

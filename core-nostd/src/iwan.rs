@@ -215,23 +215,23 @@ pub fn step_clamp<T: Real>(
     // on while the motion goes on the same way. A reversal, or a
     // standstill (where a held cell sticks, for the tangent), visits every
     // cell again.
-    let run = if df * held.force <= T::ZERO {
+    let kept = if df * held.force <= T::ZERO {
         Held::default()
     } else {
         *held
     };
-    let first = run.cells;
+    let first = kept.cells;
     let mut sweep = Sweep {
-        force: run.force,
+        force: kept.force,
         // No product by the zero limit of an empty run.
         slip: if first == 0 {
             T::ZERO
         } else {
-            run.limit * df.abs()
+            kept.limit * df.abs()
         },
         sticking: T::ZERO,
         contiguous: true,
-        held: run,
+        held: kept,
     };
     if first == 0 {
         // Every cell: a loop of known length, unrolled for small banks.

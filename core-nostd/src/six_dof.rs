@@ -44,10 +44,10 @@
 //!
 //! **States**: the six axes' [`BushingState`]s, the last loads and the
 //! fault flags of the kinematics. A configuration that is not usable (a
-//! non-finite position or one beyond a quarter of the guard, an orientation
-//! that is not a unit quaternion within 1e-3) is refused as a 1D law refuses an input: the
-//! axes keep their states, the last loads are returned and a flag is
-//! raised ([`SixDof::step`]).
+//! non-finite position or one beyond a quarter of the guard, an
+//! orientation that is not a unit quaternion within 1e-3) is refused as a
+//! 1D law refuses an input: the axes keep their states, the last loads are
+//! returned and a flag is raised ([`SixDof::step`]).
 //!
 //! **Stability**: that of each axis law; the kinematics adds none. The
 //! rotation vector is the principal one, |θ| ≤ π: at a relative rotation of
