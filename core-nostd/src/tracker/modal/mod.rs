@@ -40,8 +40,9 @@
 //!   that square root of P, not an approximation (tested against all
 //!   2n + 1 points). From 8 states on a sensor's innovation takes only the
 //!   θ and λ columns of the factor (left-looking) and `S Hᵀ = P Hᵀ -
-//!   Σ_t l_t (l_t · H)`; the whole factorisation, which also checks that the
-//!   amplitude block is positive definite, runs once per step.
+//!   Σ_t l_t (l_t · H)`, as whole rows; the whole factorisation, which also
+//!   checks that the amplitude block is positive definite, runs once per
+//!   step.
 //! - **Safety**: θ kept in (0, θ_max] below Nyquist and λ in a band given by
 //!   the largest damping ratio; covariance diagonal floored; an innovation
 //!   gate (outliers skipped, a run of them re-acquires); a mode whose
@@ -422,8 +423,10 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         samples: &[T],
     ) -> (ModalReport, bool) {
         let mut report = ModalReport::default();
+        // Unused (and optimised away) by the EKF.
+        let mut scratch = ukf::Scratch::new();
         if UKF {
-            if !self.predict_ukf(state, anchor) {
+            if !self.predict_ukf(state, anchor, &mut scratch) {
                 return (report, false);
             }
         } else {
@@ -438,7 +441,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             }
             let z = z * get(&self.meas_gain, c);
             let mut v = [T::ZERO; N];
-            let Some((zhat, s)) = self.innovation::<UKF>(state, c, &mut v) else {
+            let Some((zhat, s)) = self.innovation::<UKF>(state, c, &mut v, &mut scratch) else {
                 return (report, false);
             };
             let y = z - zhat;
@@ -456,7 +459,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 *reacquisitions = reacquisitions.saturating_add(1);
                 report.reacquired = true;
                 state.run = 0;
-                let Some((zhat, s)) = self.innovation::<UKF>(state, c, &mut v) else {
+                let Some((zhat, s)) = self.innovation::<UKF>(state, c, &mut v, &mut scratch) else {
                     return (report, false);
                 };
                 self.update(state, &v, s, z - zhat);
@@ -480,9 +483,10 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         state: &Core<T, N>,
         c: usize,
         v: &mut [T; N],
+        scratch: &mut ukf::Scratch<T, N>,
     ) -> Option<(T, T)> {
         let (zhat, s) = if UKF {
-            self.innovation_ukf(state, c, v)?
+            self.innovation_ukf(state, c, v, scratch)?
         } else {
             self.innovation_ekf(state, c, v)
         };

@@ -558,7 +558,7 @@ fn check_filters<const N: usize>(modes: usize, sensors: usize) {
         add_q_ref(&tr, &core, &mut want);
         let mut got = core.clone();
         let mut anchor = [[f64::NAN; 4]; N];
-        assert!(tr.predict_ukf(&mut got, &mut anchor));
+        assert!(tr.predict_ukf(&mut got, &mut anchor, &mut ukf::Scratch::new()));
         for i in 0..N {
             assert!(
                 (got.x[i] - mean[i]).abs() <= 1e-13 * (1.0 + mean[i].abs()),
@@ -602,7 +602,9 @@ fn check_filters<const N: usize>(modes: usize, sensors: usize) {
                 }
             }
             let mut v = [0.0; N];
-            let (zh, sz) = tr.innovation_ukf(&core, c, &mut v).unwrap();
+            let (zh, sz) = tr
+                .innovation_ukf(&core, c, &mut v, &mut ukf::Scratch::new())
+                .unwrap();
             assert!(
                 (zh - zhat).abs() <= 1e-13 * (1.0 + zhat.abs()),
                 "zhat {zh} {zhat}"
@@ -635,6 +637,7 @@ fn structured_filters_match_dense_references() {
     check_filters::<6>(1, 2);
     check_filters::<8>(2, 1);
     check_filters::<12>(2, 2);
+    check_filters::<16>(2, 3);
 }
 
 #[test]

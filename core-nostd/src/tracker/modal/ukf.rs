@@ -8,6 +8,20 @@ use super::{Core, ModalTracker};
 use crate::real::Real;
 use crate::tracker::fast::{min_positive, rsqrt};
 
+/// Working arrays of a UKF step, zeroed once per step and written before
+/// they are read: the factor's θ and λ columns (one row each).
+pub(super) struct Scratch<T, const N: usize> {
+    cols: [[T; N]; N],
+}
+
+impl<T: Real, const N: usize> Scratch<T, N> {
+    pub(super) fn new() -> Self {
+        Self {
+            cols: [[T::ZERO; N]; N],
+        }
+    }
+}
+
 impl<T: Real, const N: usize> ModalTracker<T, N> {
     /// Factorisation for the sigma points, in the order θ, λ of every mode,
     /// then the amplitudes: `cols[t]` gets column t of the lower Cholesky
@@ -92,10 +106,15 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     /// columns go through the rotation polynomials. The result is the scaled
     /// unscented transform with this square root of P, not an approximation.
     #[inline(always)]
-    pub(super) fn predict_ukf(&self, state: &mut Core<T, N>, anchor: &mut [[T; 4]; N]) -> bool {
-        let mut cols = [[T::ZERO; N]; N];
+    pub(super) fn predict_ukf(
+        &self,
+        state: &mut Core<T, N>,
+        anchor: &mut [[T; 4]; N],
+        scratch: &mut Scratch<T, N>,
+    ) -> bool {
+        let cols = &mut scratch.cols;
         let mut schur = [[T::ZERO; N]; N];
-        if !self.factor(&state.p, &mut cols, &mut schur) {
+        if !self.factor(&state.p, cols, &mut schur) {
             return false;
         }
         let (m_n, k_n) = (self.m_n(), 2 * self.m_n());
@@ -240,16 +259,17 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         state: &Core<T, N>,
         c: usize,
         v: &mut [T; N],
+        scratch: &mut Scratch<T, N>,
     ) -> Option<(T, T)> {
-        let mut cols = [[T::ZERO; N]; N];
+        let cols = &mut scratch.cols;
         // The amplitude covariance given θ and λ, formed below 8 states.
         let schur = if N < 8 {
             let mut schur = [[T::ZERO; N]; N];
-            if !self.factor(&state.p, &mut cols, &mut schur) {
+            if !self.factor(&state.p, cols, &mut schur) {
                 return None;
             }
             Some(schur)
-        } else if self.leading_columns(&state.p, &mut cols) {
+        } else if self.leading_columns(&state.p, cols) {
             None
         } else {
             return None;
@@ -287,42 +307,46 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             sum += a + b;
         }
         let zhat = w.centre_mean * z0 + w.wi * sum;
-        // u = S Hᵀ (amplitude rows), then H S Hᵀ. From 8 states on S is
-        // not formed: S Hᵀ = P Hᵀ - Σ_t l_t (l_t · H) on those rows.
+        // u = S Hᵀ (amplitude rows, zero on θ and λ), then H S Hᵀ. From 8
+        // states on S is not formed: S Hᵀ = P Hᵀ - Σ_t l_t (l_t · H), as
+        // whole rows (P is symmetric).
         let mut u = [T::ZERO; N];
-        let mut g = [T::ZERO; N];
-        if N >= 8 {
-            for (gt, l) in g.iter_mut().zip(&cols).take(k_n) {
+        if let Some(schur) = &schur {
+            for (i, ui) in u.iter_mut().enumerate() {
+                if !self.is_amplitude(i) {
+                    continue;
+                }
+                let r = sym_row(schur, i);
+                let mut acc = T::ZERO;
                 for (m, &(hp, hq)) in h.iter().enumerate().take(m_n) {
                     let (ai, bi) = self.pair(m, c);
-                    *gt += hp * get(l, ai) + hq * get(l, bi);
+                    acc += hp * get(&r, ai) + hq * get(&r, bi);
                 }
+                *ui = acc;
             }
-        }
-        let zero = [T::ZERO; N];
-        for (i, ui) in u.iter_mut().enumerate() {
-            if !self.is_amplitude(i) {
-                continue;
-            }
-            let formed;
-            let r = match &schur {
-                Some(schur) => {
-                    formed = sym_row(schur, i);
-                    &formed
-                }
-                None => state.p.get(i).unwrap_or(&zero),
-            };
-            let mut acc = T::ZERO;
+        } else {
             for (m, &(hp, hq)) in h.iter().enumerate().take(m_n) {
                 let (ai, bi) = self.pair(m, c);
-                acc += hp * get(r, ai) + hq * get(r, bi);
-            }
-            if N >= 8 {
-                for (l, &gt) in cols.iter().zip(&g).take(k_n) {
-                    acc -= get(l, i) * gt;
+                let (ra, rb) = (row(&state.p, ai), row(&state.p, bi));
+                for ((ui, &pa), &pb) in u.iter_mut().zip(&ra).zip(&rb) {
+                    *ui += hp * pa + hq * pb;
                 }
             }
-            *ui = acc;
+            for l in cols.iter().take(k_n) {
+                let mut gt = T::ZERO;
+                for (m, &(hp, hq)) in h.iter().enumerate().take(m_n) {
+                    let (ai, bi) = self.pair(m, c);
+                    gt += hp * get(l, ai) + hq * get(l, bi);
+                }
+                for (ui, &li) in u.iter_mut().zip(l) {
+                    *ui -= li * gt;
+                }
+            }
+            for m in 0..m_n {
+                let (ti, li) = self.theta_lambda(m);
+                put(&mut u, ti, T::ZERO);
+                put(&mut u, li, T::ZERO);
+            }
         }
         let dz = z0 - zhat;
         let mut s = w.centre_cov * dz * dz + get(&self.r, c);
@@ -337,13 +361,17 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         }
         s += w.wi * spread;
         // Pxz = W_i γ Σ_t l_t (Z_t^+ - Z_t^-) over θ and λ columns, + S Hᵀ.
-        for (i, (vi, ui)) in v.iter_mut().zip(&u).enumerate() {
-            let mut acc = T::ZERO;
-            for ((l, a), b) in cols.iter().zip(&zp).zip(&zm).take(k_n) {
-                acc += get(l, i) * (*a - *b);
+        let mut acc = [T::ZERO; N];
+        for ((l, a), b) in cols.iter().zip(&zp).zip(&zm).take(k_n) {
+            let d = *a - *b;
+            for (acc, &li) in acc.iter_mut().zip(l) {
+                *acc += li * d;
             }
-            *vi = w.wi_spread * acc + *ui;
         }
+        for ((vi, &ai), &ui) in v.iter_mut().zip(&acc).zip(&u) {
+            *vi = w.wi_spread * ai + ui;
+        }
+
         Some((zhat, s))
     }
 }
