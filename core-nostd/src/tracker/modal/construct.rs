@@ -165,6 +165,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 wi_spread: T::ZERO,
                 centre_mean: T::ZERO,
                 centre_cov: T::ZERO,
+                deviation: T::ZERO,
             },
             pivots: [0; N],
             amplitude: [false; N],
@@ -178,6 +179,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 wi_spread: T::from_f64(wi * g),
                 centre_mean: T::from_f64(w0m + folded),
                 centre_cov: T::from_f64(w0c + folded),
+                deviation: T::from_f64(w0c + 2.0 * wi * N as f64 - 2.0),
             };
         }
         // Factorisation order: θ and λ of every mode first, so that the

@@ -3,7 +3,7 @@
 //! eqs 3.26, 3.32 and 3.33.
 
 use super::matrix::{entry, get, mirror_upper, put, set, set_row, sym_row};
-use super::rotation::{rotate, rotation_cached};
+use super::rotation::rotation_cached;
 use super::{Core, Measured, ModalTracker};
 use crate::real::Real;
 
@@ -91,25 +91,9 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     /// [`Self::predict_ekf`] from 8 states on: x and P by mode blocks.
     #[inline(always)]
     fn predict_ekf_blocks(&self, state: &mut Core<T, N>, anchor: &mut [[T; 4]; N]) {
-        // At least 2 (provably, so that no chunking can panic).
-        let block = (2 * self.c_n() + 2).max(2);
+        let block = self.block();
         let Core { x, p, .. } = state;
-        let mut rot = [(T::ZERO, T::ZERO); N];
-        for ((r, a), xm) in rot
-            .iter_mut()
-            .zip(anchor.iter_mut())
-            .zip(x.chunks_exact_mut(block))
-        {
-            let Some(([t, l], pairs)) = xm.split_first_chunk_mut::<2>() else {
-                continue;
-            };
-            *r = rotation_cached(a, *t, *l);
-            for pair in pairs.chunks_exact_mut(2) {
-                if let [a, b] = pair {
-                    (*a, *b) = rotate(*r, *a, *b);
-                }
-            }
-        }
+        let rot = self.rotate_blocks(x, anchor);
         // Rows: a pair's rows of F P from its own rows and its mode's θ and
         // λ rows.
         for ((rows, xm), &r) in p

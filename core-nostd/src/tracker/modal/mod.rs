@@ -38,11 +38,12 @@
 //!   and `S Hᵀ` to Pxz; only the 4 modes sigma points of the θ and λ
 //!   columns are propagated one by one. This is the scaled transform for
 //!   that square root of P, not an approximation (tested against all
-//!   2n + 1 points). From 8 states on a sensor's innovation takes only the
-//!   θ and λ columns of the factor (left-looking) and `S Hᵀ = P Hᵀ -
-//!   Σ_t l_t (l_t · H)`, as whole rows; the whole factorisation, which also
-//!   checks that the amplitude block is positive definite, runs once per
-//!   step.
+//!   2n + 1 points). From 8 states on the prediction eliminates only the θ
+//!   and λ pivots (their columns and S), takes the sigma points'
+//!   deviations from the propagated centre, and factors S once per step to
+//!   check that P is positive definite; a sensor's innovation takes only
+//!   the θ and λ columns of the factor (left-looking) and `S Hᵀ = P Hᵀ -
+//!   Σ_t l_t (l_t · H)`, as whole rows.
 //! - **Safety**: θ kept in (0, θ_max] below Nyquist and λ in a band given by
 //!   the largest damping ratio; covariance diagonal floored; an innovation
 //!   gate (outliers skipped, a run of them re-acquires); a mode whose
@@ -62,11 +63,13 @@
 //! - **States**: `N = modes (2 sensors + 2)` values and an N×N covariance.
 //! - **Cost** per sample, n = N states, M modes, C sensors: EKF about 6n²
 //!   (prediction) + C (n² + 4Mn) multiply-adds and one division (from 8
-//!   states, one `1/√`) per sensor; UKF one factorisation per prediction
-//!   (n³/2 multiply-adds as whole rows, n - 1 Newton `1/√d`), (4M + 1) n²/2
-//!   for the predicted covariance, and per sensor the 2M θ and λ columns of
-//!   the factor (below 8 states the whole factorisation), 4M observations
-//!   and the rank-one update. The rotation `e^λ (cos θ, sin θ)` is
+//!   states, one `1/√`) per sensor; UKF per prediction the 2M θ and λ
+//!   pivots eliminated (2M n² multiply-adds as whole rows), S factored
+//!   (a³/6 for a = n - 2M amplitudes, a Newton `1/√d` each), `R S Rᵀ`
+//!   (about 6 a n) and the sigma points' products on one triangle
+//!   ((4M + 1) n²/2), and per sensor the 2M θ and λ columns of the factor
+//!   (below 8 states the whole factorisation), 4M observations, `S Hᵀ`
+//!   ((2M + 2) n) and the rank-one update. The rotation `e^λ (cos θ, sin θ)` is
 //!   taken in `f32` from a per-mode anchor when (θ, λ) is within 2^-10 of
 //!   it (a second-order series, [`ModalState`] keeps the anchor) and the
 //!   sigma points' from the centre's by a fourth-order series; the sin/cos
@@ -200,6 +203,10 @@ struct Weights<T> {
     centre_mean: T,
     /// W_0^c + 2 W_i (n - 2 modes).
     centre_cov: T,
+    /// β - α² = Σ W^c - 2: with the sigma points' deviations D from the
+    /// propagated centre and δ = Σ W^m D, the covariance is
+    /// `Σ W^c D Dᵀ + (β - α²) δ δᵀ` (see `predict_ukf_blocks`).
+    deviation: T,
 }
 
 impl<T: Real, const N: usize> ModalTracker<T, N> {
@@ -336,6 +343,37 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             put(x, ai, a);
             put(x, bi, b);
         }
+    }
+
+    /// States per mode from 8 states on: θ, λ and a pair per sensor; at
+    /// least 2 (provably, so that no chunking can panic).
+    #[inline(always)]
+    fn block(&self) -> usize {
+        (2 * self.c_n() + 2).max(2)
+    }
+
+    /// From 8 states on: each mode's rotation (from its anchor, see
+    /// [`rotation::rotation_cached`]), and every pair of `x` turned by its
+    /// mode's, mode block by mode block.
+    #[inline(always)]
+    fn rotate_blocks(&self, x: &mut [T; N], anchor: &mut [[T; 4]; N]) -> [(T, T); N] {
+        let mut rot = [(T::ZERO, T::ZERO); N];
+        for ((r, a), xm) in rot
+            .iter_mut()
+            .zip(anchor.iter_mut())
+            .zip(x.chunks_exact_mut(self.block()))
+        {
+            let Some(([t, l], pairs)) = xm.split_first_chunk_mut::<2>() else {
+                continue;
+            };
+            *r = rotation::rotation_cached(a, *t, *l);
+            for pair in pairs.chunks_exact_mut(2) {
+                if let [a, b] = pair {
+                    (*a, *b) = rotate(*r, *a, *b);
+                }
+            }
+        }
+        rot
     }
 
     /// `(α, β)` such that sensor `c` reads `α a + β b` of a pair whose mode

@@ -2,100 +2,30 @@
 //! prediction and the innovation of one sensor, the amplitude columns in
 //! closed form (see the module docs of `modal`).
 
-use super::matrix::{entry, get, put, row, set, set_row, sym_row};
+use super::matrix::{entry, get, mirror_upper, put, row, set, set_row, sym_row};
 use super::rotation::{rotate, rotation_cached, rotation_pair};
 use super::{Core, ModalTracker};
 use crate::real::Real;
 use crate::tracker::fast::{min_positive, rsqrt};
 
 /// Working arrays of a UKF step, zeroed once per step and written before
-/// they are read: the factor's θ and λ columns (one row each).
+/// they are read: the factor's θ and λ columns (one row each) and, from 8
+/// states on, the sigma points' deviations.
 pub(super) struct Scratch<T, const N: usize> {
     cols: [[T; N]; N],
+    dev: [[T; N]; N],
 }
 
 impl<T: Real, const N: usize> Scratch<T, N> {
     pub(super) fn new() -> Self {
         Self {
             cols: [[T::ZERO; N]; N],
+            dev: [[T::ZERO; N]; N],
         }
     }
 }
 
 impl<T: Real, const N: usize> ModalTracker<T, N> {
-    /// Factorisation for the sigma points, in the order θ, λ of every mode,
-    /// then the amplitudes: `cols[t]` gets column t of the lower Cholesky
-    /// factor for the 2 modes θ and λ pivots (zero on the states eliminated
-    /// before), `schur` the covariance of the amplitudes given θ and λ,
-    /// `P - Σ_t cols[t] cols[t]ᵀ` (its amplitude block; the rest is
-    /// meaningless), which is all the amplitude columns contribute (see
-    /// `predict_ukf`). The amplitude pivots are still eliminated to check
-    /// that P is positive definite; false if not. `1/√d` per pivot by
-    /// Newton's method, no division.
-    #[inline(always)]
-    pub(super) fn factor(
-        &self,
-        p: &[[T; N]; N],
-        cols: &mut [[T; N]; N],
-        schur: &mut [[T; N]; N],
-    ) -> bool {
-        if N < 8 {
-            return factor_natural(p, cols, schur);
-        }
-        // Permuted to the pivot order and factored right-looking: after
-        // pivot t the rows below hold the Schur complement on and below the
-        // diagonal (what lies elsewhere is never read). Whole-row updates
-        // (the column's zeros leave the eliminated part alone) unroll and
-        // need no bounds per entry.
-        let k_n = 2 * self.m_n();
-        let mut w = [[T::ZERO; N]; N];
-        for (i, row) in w.iter_mut().enumerate() {
-            let pi = self.pivot(i);
-            for (j, v) in row.iter_mut().enumerate().take(i + 1) {
-                *v = entry(p, pi, self.pivot(j));
-            }
-        }
-        for t in 0..N {
-            let d = entry(&w, t, t);
-            if !pivot_ok(d) {
-                return false;
-            }
-            if t + 1 == N {
-                break;
-            }
-            let r = rsqrt(d);
-            let mut l = [T::ZERO; N];
-            for (li, row) in l.iter_mut().zip(&w).skip(t + 1) {
-                *li = get(row, t) * r;
-            }
-            for (row, &li) in w.iter_mut().zip(&l).skip(t + 1) {
-                for (v, &lj) in row.iter_mut().zip(&l) {
-                    *v -= li * lj;
-                }
-            }
-            if t < k_n {
-                if let Some(col) = cols.get_mut(t) {
-                    *col = [T::ZERO; N];
-                    put(col, self.pivot(t), d * r);
-                    for (i, &li) in l.iter().enumerate().skip(t + 1) {
-                        put(col, self.pivot(i), li);
-                    }
-                }
-                if t + 1 == k_n {
-                    for (i, row) in w.iter().enumerate().skip(k_n) {
-                        let pi = self.pivot(i);
-                        for (j, &v) in row.iter().enumerate().take(i + 1).skip(k_n) {
-                            let pj = self.pivot(j);
-                            set(schur, pi, pj, v);
-                            set(schur, pj, pi, v);
-                        }
-                    }
-                }
-            }
-        }
-        true
-    }
-
     /// UKF prediction. With θ and λ factored first, the sigma points of the
     /// amplitude columns `x ± γ l_t` share the centre's θ and λ, so the
     /// process moves them linearly: `f(x) ± γ R l_t`, R the centre's
@@ -112,9 +42,12 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         anchor: &mut [[T; 4]; N],
         scratch: &mut Scratch<T, N>,
     ) -> bool {
+        if N >= 8 {
+            return self.predict_ukf_blocks(state, anchor, scratch);
+        }
         let cols = &mut scratch.cols;
         let mut schur = [[T::ZERO; N]; N];
-        if !self.factor(&state.p, cols, &mut schur) {
+        if !factor_natural(&state.p, cols, &mut schur) {
             return false;
         }
         let (m_n, k_n) = (self.m_n(), 2 * self.m_n());
@@ -197,6 +130,257 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         true
     }
 
+    /// [`Self::predict_ukf`] from 8 states on, by mode blocks. Only the θ
+    /// and λ pivots are eliminated, from a copy of P: their columns of the
+    /// factor and S, `P - Σ_t l_t l_tᵀ` on the amplitude rows. With `D` the
+    /// deviations of the θ and λ columns' sigma points from the propagated
+    /// centre `f(x)` (for a mode whose θ and λ the column leaves alone,
+    /// exactly `±γ R l_t`, so computed) and `δ = W_i Σ D`, the mean is
+    /// `f(x) + δ` and the covariance
+    /// `W_i Σ_t (D⁺ D⁺ᵀ + D⁻ D⁻ᵀ) + (β - α²) δ δᵀ + R S Rᵀ`: the same
+    /// transform as with the deviations from the mean (tested against all
+    /// 2n + 1 points), without a difference of two nearly equal sums.
+    /// The amplitude block of S is then factored in place, which checks
+    /// that P is positive definite (false if not).
+    #[inline(always)]
+    fn predict_ukf_blocks(
+        &self,
+        state: &mut Core<T, N>,
+        anchor: &mut [[T; 4]; N],
+        scratch: &mut Scratch<T, N>,
+    ) -> bool {
+        let (m_n, k_n, block) = (self.m_n(), 2 * self.m_n(), self.block());
+        let w = self.ut;
+        let Scratch { cols, dev } = scratch;
+        // The θ and λ pivots eliminated from a copy of P, right-looking:
+        // cols[t] gets column t of the factor, and the rows not yet
+        // eliminated (whole rows) their Schur complement, so S on the
+        // amplitude rows (exactly symmetric); then zero on the θ and λ
+        // columns of those rows.
+        let mut s = state.p;
+        let mut done = [false; N];
+        for (t, col) in cols.iter_mut().enumerate().take(k_n) {
+            let pt = self.pivot(t);
+            let d = entry(&s, pt, pt);
+            if !pivot_ok(d) {
+                return false;
+            }
+            let r = rsqrt(d);
+            put(&mut done, pt, true);
+            let mut l = [T::ZERO; N];
+            for ((li, row), &di) in l.iter_mut().zip(&s).zip(&done) {
+                if !di {
+                    *li = get(row, pt) * r;
+                }
+            }
+            for ((row, &li), &di) in s.iter_mut().zip(&l).zip(&done) {
+                if !di {
+                    for (v, &lj) in row.iter_mut().zip(&l) {
+                        *v -= li * lj;
+                    }
+                }
+            }
+            put(&mut l, pt, d * r);
+            *col = l;
+        }
+        for (i, row) in s.iter_mut().enumerate() {
+            if self.is_amplitude(i) {
+                for m in 0..m_n {
+                    let (ti, li) = self.theta_lambda(m);
+                    put(row, ti, T::ZERO);
+                    put(row, li, T::ZERO);
+                }
+            }
+        }
+        let x = state.x;
+        let mut f0 = x;
+        let rot = self.rotate_blocks(&mut f0, anchor);
+        let p = &mut state.p;
+        // R S Rᵀ: the pair rows of S turned (θ and λ rows zero), then the
+        // pair columns on and above the diagonal.
+        for ((rows, srows), &r) in p
+            .chunks_exact_mut(block)
+            .zip(s.chunks_exact(block))
+            .zip(&rot)
+        {
+            let Some(([rt, rl], pairs)) = rows.split_first_chunk_mut::<2>() else {
+                continue;
+            };
+            *rt = [T::ZERO; N];
+            *rl = [T::ZERO; N];
+            let spairs = srows.get(2..).unwrap_or(&[]);
+            for (pair, spair) in pairs.chunks_exact_mut(2).zip(spairs.chunks_exact(2)) {
+                if let ([ra, rb], [sa, sb]) = (pair, spair) {
+                    for (((pa, pb), &va), &vb) in ra.iter_mut().zip(rb.iter_mut()).zip(sa).zip(sb) {
+                        (*pa, *pb) = rotate(r, va, vb);
+                    }
+                }
+            }
+        }
+        for (m2, &r) in rot.iter().enumerate().take(m_n) {
+            for c2 in 0..self.c_n() {
+                let (aj, bj) = self.pair(m2, c2);
+                for row in p.iter_mut().take(bj + 1) {
+                    if let Some([va, vb]) = row.get_mut(aj..=bj) {
+                        (*va, *vb) = rotate(r, *va, *vb);
+                    }
+                }
+            }
+        }
+        // The deviations of the θ and λ columns' sigma points, rows 2t
+        // (plus) and 2t + 1 (minus).
+        let g = w.spread;
+        let mut delta = [T::ZERO; N];
+        for (t, (l, pm)) in cols
+            .iter()
+            .zip(dev.chunks_exact_mut(2))
+            .take(k_n)
+            .enumerate()
+        {
+            let [dp, dm] = pm else { continue };
+            let modes = dp
+                .chunks_exact_mut(block)
+                .zip(dm.chunks_exact_mut(block))
+                .zip(l.chunks_exact(block))
+                .zip(x.chunks_exact(block).zip(f0.chunks_exact(block)))
+                .zip(&rot);
+            for (m, ((((dpm, dmm), lm), (xm, fm)), &r)) in modes.enumerate() {
+                let (Some(([dpt, dpl], dpp)), Some(([dmt, dml], dmp))) = (
+                    dpm.split_first_chunk_mut::<2>(),
+                    dmm.split_first_chunk_mut::<2>(),
+                ) else {
+                    continue;
+                };
+                let (Some((&[lt, ll], lp)), Some((&[xt, xl], xp)), Some((_, fp))) = (
+                    lm.split_first_chunk::<2>(),
+                    xm.split_first_chunk::<2>(),
+                    fm.split_first_chunk::<2>(),
+                ) else {
+                    continue;
+                };
+                let (dt, dl) = (g * lt, g * ll);
+                // θ and λ offsets as the sigma points hold them, (θ + γl) -
+                // θ rather than γl: the rounding of θ ± γl belongs to the
+                // points propagated, and without it the covariance drifts
+                // indefinite in f32 over long runs (`tracker_endurance`).
+                (*dpt, *dpl) = ((xt + dt) - xt, (xl + dl) - xl);
+                (*dmt, *dml) = ((xt - dt) - xt, (xl - dl) - xl);
+                let pairs = dpp
+                    .chunks_exact_mut(2)
+                    .zip(dmp.chunks_exact_mut(2))
+                    .zip(lp.chunks_exact(2))
+                    .zip(xp.chunks_exact(2).zip(fp.chunks_exact(2)));
+                if 2 * m + 1 >= t {
+                    let [rp, rn] = rotation_pair(xt, xl, dt, dl, r);
+                    for (((dpp, dmp), lp), (xp, fp)) in pairs {
+                        if let ([pa, pb], [na, nb], &[la, lb], &[a, b], &[fa, fb]) =
+                            (dpp, dmp, lp, xp, fp)
+                        {
+                            let (da, db) = (g * la, g * lb);
+                            let (ya, yb) = rotate(rp, a + da, b + db);
+                            (*pa, *pb) = (ya - fa, yb - fb);
+                            let (ya, yb) = rotate(rn, a - da, b - db);
+                            (*na, *nb) = (ya - fa, yb - fb);
+                        }
+                    }
+                } else {
+                    for ((dpp, dmp), lp) in pairs.map(|(d, _)| d) {
+                        if let ([pa, pb], [na, nb], &[la, lb]) = (dpp, dmp, lp) {
+                            let (ua, ub) = rotate(r, g * la, g * lb);
+                            (*pa, *pb, *na, *nb) = (ua, ub, -ua, -ub);
+                        }
+                    }
+                }
+            }
+            for ((d, &a), &b) in delta.iter_mut().zip(dp.iter()).zip(dm.iter()) {
+                *d += a + b;
+            }
+        }
+        for d in delta.iter_mut() {
+            *d *= w.wi;
+        }
+        // The sigma points' products on and above the diagonal, mirrored.
+        // Each row from the multiple of 4 at or below the diagonal (the
+        // entries below it are replaced by the mirror), so that the
+        // unrolled loops have no remainder when 4 divides N.
+        for (i, row) in p.iter_mut().enumerate() {
+            let from = i & !3;
+            let Some(row) = row.get_mut(from..) else {
+                continue;
+            };
+            // A mode's four deviations (θ and λ, plus and minus) at a time.
+            for quad in dev.chunks_exact(4).take(m_n) {
+                let [d0, d1, d2, d3] = quad else { continue };
+                let f = |d: &[T; N]| w.wi * get(d, i);
+                let (f0, f1, f2, f3) = (f(d0), f(d1), f(d2), f(d3));
+                let (Some(d0), Some(d1), Some(d2), Some(d3)) = (
+                    d0.get(from..),
+                    d1.get(from..),
+                    d2.get(from..),
+                    d3.get(from..),
+                ) else {
+                    continue;
+                };
+                for ((((v, &a), &b), &c), &d) in row.iter_mut().zip(d0).zip(d1).zip(d2).zip(d3) {
+                    *v += f0 * a + f1 * b + f2 * c + f3 * d;
+                }
+            }
+            let f = w.deviation * get(&delta, i);
+            for (v, &dj) in row.iter_mut().zip(delta.get(from..).unwrap_or(&[])) {
+                *v += f * dj;
+            }
+        }
+        mirror_upper(p);
+        for (xi, (&fi, &di)) in state.x.iter_mut().zip(f0.iter().zip(&delta)) {
+            *xi = fi + di;
+        }
+        self.add_process_noise(state);
+        self.amplitudes_definite(&mut s)
+    }
+
+    /// True if the amplitude block of `s` (symmetric, zero on the θ and λ
+    /// columns of its amplitude rows) is positive definite: its Cholesky
+    /// factorisation in place, on and above the diagonal, every pivot
+    /// usable.
+    #[inline(always)]
+    fn amplitudes_definite(&self, s: &mut [[T; N]; N]) -> bool {
+        for t in 0..N {
+            if !self.is_amplitude(t) {
+                continue;
+            }
+            let Some((top, below)) = s.split_at_mut_checked(t + 1) else {
+                continue;
+            };
+            let Some(rt) = top.last() else { continue };
+            let d = get(rt, t);
+            if !pivot_ok(d) {
+                return false;
+            }
+            let r = rsqrt(d);
+            // Row t scaled, zero up to t (aligned as in `predict_ukf_blocks`:
+            // entries below the diagonal are never read).
+            let mut l = [T::ZERO; N];
+            let tail = l.get_mut(t + 1..).unwrap_or(&mut []);
+            for (lj, &v) in tail.iter_mut().zip(rt.get(t + 1..).unwrap_or(&[])) {
+                *lj = v * r;
+            }
+            for (row, i) in below.iter_mut().zip(t + 1..) {
+                if !self.is_amplitude(i) {
+                    continue;
+                }
+                let li = get(&l, i);
+                let from = i & !3;
+                let (Some(row), Some(l)) = (row.get_mut(from..), l.get(from..)) else {
+                    continue;
+                };
+                for (v, &lj) in row.iter_mut().zip(l) {
+                    *v -= li * lj;
+                }
+            }
+        }
+        true
+    }
+
     /// `p += R S Rᵀ` on the amplitude block, R the rotation of each mode's
     /// pairs: first the rows, then the columns on and above the diagonal,
     /// mirrored.
@@ -265,7 +449,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         // The amplitude covariance given θ and λ, formed below 8 states.
         let schur = if N < 8 {
             let mut schur = [[T::ZERO; N]; N];
-            if !self.factor(&state.p, cols, &mut schur) {
+            if !factor_natural(&state.p, cols, &mut schur) {
                 return None;
             }
             Some(schur)
@@ -377,13 +561,14 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
 }
 
 impl<T: Real, const N: usize> ModalTracker<T, N> {
-    /// The θ and λ columns of [`Self::factor`]'s Cholesky factor alone
-    /// (8 states or more), left-looking: column t is P's pivot column less
-    /// the columns before it times their entry at the pivot, scaled by
-    /// `1/√d`, and zero on the states eliminated before. The amplitude
-    /// pivots are not eliminated: an innovation needs only `S Hᵀ`, which
-    /// these columns give, and the prediction's factorisation checks the
-    /// whole covariance once per step. False if a pivot is not usable.
+    /// The θ and λ columns of the Cholesky factor of P in the order θ, λ of
+    /// every mode, then the amplitudes (8 states or more), left-looking:
+    /// column t is P's pivot column less the columns before it times their
+    /// entry at the pivot, scaled by `1/√d`, and zero on the states
+    /// eliminated before; written to `cols[t]`. The amplitude pivots are not
+    /// eliminated: an innovation needs only `S Hᵀ`, which these columns
+    /// give, and the prediction checks S once per step
+    /// ([`Self::amplitudes_definite`]). False if a pivot is not usable.
     #[inline(always)]
     fn leading_columns(&self, p: &[[T; N]; N], cols: &mut [[T; N]; N]) -> bool {
         for t in 0..2 * self.m_n() {
@@ -413,8 +598,14 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     }
 }
 
-/// [`ModalTracker::factor`] for one mode, whose θ and λ come first: the
-/// plain right-looking Cholesky order, with loops the optimiser unrolls.
+/// Factorisation for the sigma points below 8 states (one mode, whose θ
+/// and λ come first): `cols[0]` and `cols[1]` get the θ and λ columns of
+/// the lower Cholesky factor, `schur` the covariance of the amplitudes
+/// given θ and λ (`P - Σ_t l_t l_tᵀ` on the amplitude block), which is all
+/// the amplitude columns contribute (see `predict_ukf`). The amplitude
+/// pivots are still eliminated, to check that P is positive definite
+/// (false if not). The plain right-looking order, with loops the
+/// optimiser unrolls; `1/√d` per pivot by Newton's method, no division.
 #[inline(always)]
 fn factor_natural<T: Real, const N: usize>(
     p: &[[T; N]; N],
