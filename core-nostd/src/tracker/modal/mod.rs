@@ -81,8 +81,8 @@
 //!   on Cortex-M4F, worst of three inputs (QEMU, f32; `cargo run -q -p
 //!   bushing-boards --release --target thumbv7em-none-eabihf --bin
 //!   kernel-cost`, family `tracker`): one mode and one accelerometer
-//!   (4 states) EKF 426, UKF 1 090; two modes and three accelerometers
-//!   (16 states) EKF 14 329, UKF 64 421. Estimated cycles in
+//!   (4 states) EKF 427, UKF 1 078; two modes and three accelerometers
+//!   (16 states) EKF 14 222, UKF 44 482. Estimated cycles in
 //!   `docs/accuracy-cost.md`.
 
 // The parts: the public inputs and outputs (`types`), construction
