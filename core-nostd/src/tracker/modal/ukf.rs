@@ -344,6 +344,11 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     /// usable.
     #[inline(always)]
     fn amplitudes_definite(&self, s: &mut [[T; N]; N]) -> bool {
+        // Row t scaled, from t + 1 on; what lies before is left from the
+        // pivots before and meets only entries below the diagonal (rows
+        // are updated from the multiple of 4 below it), which are never
+        // read.
+        let mut l = [T::ZERO; N];
         for t in 0..N {
             if !self.is_amplitude(t) {
                 continue;
@@ -357,9 +362,6 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 return false;
             }
             let r = rsqrt(d);
-            // Row t scaled, zero up to t (aligned as in `predict_ukf_blocks`:
-            // entries below the diagonal are never read).
-            let mut l = [T::ZERO; N];
             let tail = l.get_mut(t + 1..).unwrap_or(&mut []);
             for (lj, &v) in tail.iter_mut().zip(rt.get(t + 1..).unwrap_or(&[])) {
                 *lj = v * r;
@@ -511,8 +513,10 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         } else {
             for (m, &(hp, hq)) in h.iter().enumerate().take(m_n) {
                 let (ai, bi) = self.pair(m, c);
-                let (ra, rb) = (row(&state.p, ai), row(&state.p, bi));
-                for ((ui, &pa), &pb) in u.iter_mut().zip(&ra).zip(&rb) {
+                let (Some(ra), Some(rb)) = (state.p.get(ai), state.p.get(bi)) else {
+                    continue;
+                };
+                for ((ui, &pa), &pb) in u.iter_mut().zip(ra).zip(rb) {
                     *ui += hp * pa + hq * pb;
                 }
             }
@@ -573,14 +577,21 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     fn leading_columns(&self, p: &[[T; N]; N], cols: &mut [[T; N]; N]) -> bool {
         for t in 0..2 * self.m_n() {
             let pt = self.pivot(t);
-            let mut col = row(p, pt);
-            for l in cols.iter().take(t) {
+            // Column t built in place, from the columns before it.
+            let Some((before, rest)) = cols.split_at_mut_checked(t) else {
+                return false;
+            };
+            let Some(col) = rest.first_mut() else {
+                return false;
+            };
+            *col = row(p, pt);
+            for l in before.iter() {
                 let f = get(l, pt);
                 for (c, &li) in col.iter_mut().zip(l) {
                     *c -= li * f;
                 }
             }
-            let d = get(&col, pt);
+            let d = get(col, pt);
             if !pivot_ok(d) {
                 return false;
             }
@@ -588,11 +599,10 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             for c in col.iter_mut() {
                 *c *= r;
             }
-            put(&mut col, pt, d * r);
+            put(col, pt, d * r);
             for s in 0..t {
-                put(&mut col, self.pivot(s), T::ZERO);
+                put(col, self.pivot(s), T::ZERO);
             }
-            put(cols, t, col);
         }
         true
     }
