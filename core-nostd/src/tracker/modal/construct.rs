@@ -165,7 +165,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 wi_spread: T::ZERO,
                 centre_mean: T::ZERO,
                 centre_cov: T::ZERO,
-                deviation: T::ZERO,
+                shift: T::ZERO,
             },
             pivots: [0; N],
             amplitude: [false; N],
@@ -179,7 +179,11 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 wi_spread: T::from_f64(wi * g),
                 centre_mean: T::from_f64(w0m + folded),
                 centre_cov: T::from_f64(w0c + folded),
-                deviation: T::from_f64(w0c + 2.0 * wi * N as f64 - 2.0),
+                shift: T::from_f64(deviation_shift(
+                    wi,
+                    4 * m_n,
+                    w0c + 2.0 * wi * N as f64 - 2.0,
+                )),
             };
         }
         // Factorisation order: θ and λ of every mode first, so that the
@@ -316,5 +320,22 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             }
         }
         Ok(me)
+    }
+}
+
+/// The shift c of the UKF's sigma-point deviations from 8 states on (see
+/// `predict_ukf_blocks`): with K deviations `D_k` of weight `W_i` and
+/// `δ = W_i Σ D_k`, `W_i Σ (D_k - c δ)(D_k - c δ)ᵀ` adds
+/// `(W_i K c² - 2 c) δ δᵀ` to `W_i Σ D_k D_kᵀ`, which is the
+/// `(β - α²) δ δᵀ` = `q δ δᵀ` the transform needs when
+/// `c = (1 - √(1 + W_i K q)) / (W_i K)`, the root nearer zero. Real, since
+/// `q >= -α²` and `W_i K = K / (2 α² (n + κ)) <= 1/(2 α²)` (K = 4 modes
+/// <= n).
+fn deviation_shift(wi: f64, k: usize, q: f64) -> f64 {
+    let a = wi * k as f64;
+    if a > 0.0 {
+        (1.0 - libm::sqrt(1.0 + a * q)) / a
+    } else {
+        0.0
     }
 }

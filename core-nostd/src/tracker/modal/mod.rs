@@ -203,10 +203,9 @@ struct Weights<T> {
     centre_mean: T,
     /// W_0^c + 2 W_i (n - 2 modes).
     centre_cov: T,
-    /// β - α² = Σ W^c - 2: with the sigma points' deviations D from the
-    /// propagated centre and δ = Σ W^m D, the covariance is
-    /// `Σ W^c D Dᵀ + (β - α²) δ δᵀ` (see `predict_ukf_blocks`).
-    deviation: T,
+    /// From 8 states on, the shift c that turns the sigma points'
+    /// deviations D into `D - c δ` (see `construct::deviation_shift`).
+    shift: T,
 }
 
 impl<T: Real, const N: usize> ModalTracker<T, N> {

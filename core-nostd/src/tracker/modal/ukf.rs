@@ -139,7 +139,8 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     /// `f(x) + δ` and the covariance
     /// `W_i Σ_t (D⁺ D⁺ᵀ + D⁻ D⁻ᵀ) + (β - α²) δ δᵀ + R S Rᵀ`: the same
     /// transform as with the deviations from the mean (tested against all
-    /// 2n + 1 points), without a difference of two nearly equal sums.
+    /// 2n + 1 points), without a difference of two nearly equal sums; the
+    /// δδᵀ term is folded into the deviations, as `D - c δ`.
     /// The amplitude block of S is then factored in place, which checks
     /// that P is positive definite (false if not).
     #[inline(always)]
@@ -299,6 +300,13 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
         for d in delta.iter_mut() {
             *d *= w.wi;
         }
+        // D - c δ: the products of these alone are the covariance (see
+        // `construct::deviation_shift`).
+        for d in dev.iter_mut().take(2 * k_n) {
+            for (v, &dj) in d.iter_mut().zip(&delta) {
+                *v -= w.shift * dj;
+            }
+        }
         // The sigma points' products on and above the diagonal, mirrored.
         // Each row from the multiple of 4 at or below the diagonal (the
         // entries below it are replaced by the mirror), so that the
@@ -324,10 +332,6 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 for ((((v, &a), &b), &c), &d) in row.iter_mut().zip(d0).zip(d1).zip(d2).zip(d3) {
                     *v += f0 * a + f1 * b + f2 * c + f3 * d;
                 }
-            }
-            let f = w.deviation * get(&delta, i);
-            for (v, &dj) in row.iter_mut().zip(delta.get(from..).unwrap_or(&[])) {
-                *v += f * dj;
             }
         }
         mirror_upper(p);
