@@ -82,7 +82,7 @@
 //!   bushing-boards --release --target thumbv7em-none-eabihf --bin
 //!   kernel-cost`, family `tracker`): one mode and one accelerometer
 //!   (4 states) EKF 427, UKF 1 078; two modes and three accelerometers
-//!   (16 states) EKF 14 266, UKF 43 674. Estimated cycles in
+//!   (16 states) EKF 14 294, UKF 42 901. Estimated cycles in
 //!   `docs/accuracy-cost.md`.
 
 // The parts: the public inputs and outputs (`types`), construction
