@@ -35,6 +35,8 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     /// covariance given θ and λ. Only the 4 modes points of the θ and λ
     /// columns go through the rotation polynomials. The result is the scaled
     /// unscented transform with this square root of P, not an approximation.
+    /// From 8 states on, [`Self::predict_ukf_blocks`]. False if P is not
+    /// positive definite.
     #[inline(always)]
     pub(super) fn predict_ukf(
         &self,
@@ -320,7 +322,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
             for quad in dev.chunks_exact(4).take(m_n) {
                 let [d0, d1, d2, d3] = quad else { continue };
                 let f = |d: &[T; N]| w.wi * get(d, i);
-                let (f0, f1, f2, f3) = (f(d0), f(d1), f(d2), f(d3));
+                let (k0, k1, k2, k3) = (f(d0), f(d1), f(d2), f(d3));
                 let (Some(d0), Some(d1), Some(d2), Some(d3)) = (
                     d0.get(from..),
                     d1.get(from..),
@@ -330,7 +332,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                     continue;
                 };
                 for ((((v, &a), &b), &c), &d) in row.iter_mut().zip(d0).zip(d1).zip(d2).zip(d3) {
-                    *v += f0 * a + f1 * b + f2 * c + f3 * d;
+                    *v += k0 * a + k1 * b + k2 * c + k3 * d;
                 }
             }
         }
