@@ -4,7 +4,9 @@
 #      mps2-an385) each run the 10 000 periods of scenes/rig-loop.toml and
 #      exit with their verdict (no overrun, no ADC underrun, no transfer
 #      error, tracker within 1 %, M4F flash <= 64 KiB and static RAM
-#      <= 16 KiB);
+#      <= 16 KiB); each logs with defmt, and its log is decoded with the
+#      ELF by bushing-defmt-log, which fails on a malformed or truncated
+#      log (shown on two damaged copies of the M4F log);
 #   2. bushing-sim runs the same scene in f32 and in f64;
 #   3. the M4F force trace must equal the f32 host trace bit for bit, and the
 #      M3 trace must stay within one DAC step (0.125 N) of the f64 trace;
@@ -26,16 +28,51 @@ sim="$target/release/bushing-sim"
 mkdir -p "$out"
 step() { printf '\n==> %s\n' "$*"; }
 summary() { grep -E '^(rig-loop|periods|instructions|memory|tracker|verdict)' "$1"; }
+decoder="$target/release/bushing-defmt-log"
+cargo build -q --release -p bushing-defmt-log
 
-step "rig loop on the Cortex-M4F (f32) in QEMU"
-cargo run -q --release -p bushing-boards --target thumbv7em-none-eabihf --bin rig-loop >"$out/m4f.log" \
-    || { tail -n 8 "$out/m4f.log"; exit 1; }
-summary "$out/m4f.log"
+# rig TARGET NAME: runs the rig loop in QEMU (its defmt bytes into
+# NAME.defmt), decodes them into NAME.log and checks what they say.
+rig() {
+    local status=0
+    cargo run -q --release -p bushing-boards --target "$1" --bin rig-loop >"$out/$2.defmt" \
+        || status=$?
+    rm -f "$out/$2.log"
+    if ! "$decoder" "$target/$1/release/rig-loop" "$out/$2.defmt" >"$out/$2.log"; then
+        echo "error: the $2 rig loop's defmt log does not decode" >&2
+        exit 1
+    fi
+    if [ "$status" -ne 0 ]; then
+        tail -n 8 "$out/$2.log"
+        exit 1
+    fi
+    summary "$out/$2.log"
+    # The verdict, the fault flags by name and the tracker's last estimate
+    # (the core's defmt::Format of Faults and ModeStatus), as decoded.
+    grep -qx 'verdict pass' "$out/$2.log" \
+        && grep -Eq '^periods 10000 .* faults NONE$' "$out/$2.log" \
+        && grep -Eq ' last Some\(ModeStatus \{ frequency: [0-9.]+, damping: .*faded: false \}\)$' "$out/$2.log" \
+        || { echo "error: the $2 log lacks its verdict, fault names or tracker estimate" >&2; exit 1; }
+}
 
-step "rig loop on the Cortex-M3 (Q16) in QEMU"
-cargo run -q --release -p bushing-boards --target thumbv7m-none-eabi --bin rig-loop >"$out/m3.log" \
-    || { tail -n 8 "$out/m3.log"; exit 1; }
-summary "$out/m3.log"
+step "rig loop on the Cortex-M4F (f32) in QEMU, defmt log decoded"
+rig thumbv7em-none-eabihf m4f
+
+step "rig loop on the Cortex-M3 (Q16) in QEMU, defmt log decoded"
+rig thumbv7m-none-eabi m3
+
+step "the decoder refuses a damaged log: truncated mid-frame, and a frame inserted"
+elf="$target/thumbv7em-none-eabihf/release/rig-loop"
+head -c -2 "$out/m4f.defmt" >"$out/m4f-truncated.defmt"
+{ head -c 5000 "$out/m4f.defmt"; printf '\377\377\377\000'; tail -c +5001 "$out/m4f.defmt"; } \
+    >"$out/m4f-inserted.defmt"
+for damaged in truncated inserted; do
+    if "$decoder" "$elf" "$out/m4f-$damaged.defmt" >/dev/null 2>"$out/m4f-$damaged.txt"; then
+        echo "error: the $damaged log decoded" >&2
+        exit 1
+    fi
+    echo "$damaged: $(cat "$out/m4f-$damaged.txt")"
+done
 
 step "the same scene in bushing-sim, f32 and f64"
 cargo build -q --release -p bushing-sim

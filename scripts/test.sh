@@ -14,7 +14,8 @@
 #      QEMU, and the generator (into target/, so that it cannot rot);
 #   5. the host tests (unit, integration, doc), the firmware drivers on
 #      embedded-hal-mock, and the rig loop of scripts/rig-loop.sh: both
-#      firmwares in QEMU against bushing-sim, and the panic-never link check;
+#      firmwares in QEMU against bushing-sim (their defmt logs decoded),
+#      and the panic-never link check;
 #   6. every scene of scenes/ run with the README's command form;
 #   7. a scene's cost against its parts in host instructions (callgrind),
 #      printed, never asserted.
@@ -70,6 +71,7 @@ cargo clippy -p bushing --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing --features micromath --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing --features fixed --target thumbv7m-none-eabi -- -D warnings
 cargo clippy -p bushing --features serde --target thumbv7em-none-eabihf -- -D warnings
+cargo clippy -p bushing --features defmt,fixed --target thumbv7m-none-eabi -- -D warnings
 cargo clippy -p bushing-kernels --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing-kernels --features fixed --target thumbv7m-none-eabi -- -D warnings
 cargo clippy -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m --test hard_cases -- -D warnings

@@ -32,6 +32,7 @@ pub struct Drive<T> {
 
 /// The result of one effect over one step.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct EffectOutput<T> {
     /// Force carried by the effect's branches at the end of the step.
     pub force: T,
@@ -350,6 +351,7 @@ impl<T: Real, S> BushingState<T, S> {
 
 /// The result of one bushing step.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Output<T, R> {
     /// Total force F_n.
     pub force: T,

@@ -5,6 +5,7 @@ use core::fmt;
 /// Names one parameter, with its position when it belongs to a list
 /// (a cell of a bank, a knot of a spline, a coefficient of a polynomial).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Param {
     /// Parameter name as written in the docs and in scene files.
     pub name: &'static str,
@@ -38,6 +39,7 @@ impl fmt::Display for Param {
 /// Why a set of parameters was refused. One variant per broken rule; each
 /// names the parameter and the bound it breaks.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ParamError {
     /// The value is NaN or infinite, or a coefficient derived from it
     /// overflows the working type (a Maxwell cell whose ω·dt is too large
@@ -323,7 +325,22 @@ pub(crate) fn finite(param: Param, value: f64) -> Result<f64, ParamError> {
 
 /// Sticky fault flags of a running model. A step that raises one keeps the
 /// last finite state; the caller reads and clears the flags when it likes.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+///
+/// `Display` (and `Debug`, and `defmt::Format` with the `defmt` feature)
+/// name the raised flags, as the constants are named:
+///
+/// ```
+/// use bushing::Faults;
+///
+/// let mut f = Faults::NONE;
+/// assert_eq!(f.to_string(), "NONE");
+/// f.raise(Faults::OUT_OF_RANGE);
+/// f.raise(Faults::NON_FINITE_INPUT);
+/// assert_eq!(f.to_string(), "NON_FINITE_INPUT | OUT_OF_RANGE");
+/// assert_eq!(format!("{f:?}"), "Faults(NON_FINITE_INPUT | OUT_OF_RANGE)");
+/// assert_eq!(f.names().count(), 2);
+/// ```
+#[derive(Clone, Copy, Default, PartialEq, Eq)]
 pub struct Faults(u8);
 
 impl Faults {
@@ -361,6 +378,74 @@ impl Faults {
     /// The raw bits (for logging).
     pub const fn bits(self) -> u8 {
         self.0
+    }
+
+    /// Every flag with its name, in the order of its bit.
+    pub const FLAGS: [(Self, &'static str); 4] = [
+        (Self::NON_FINITE_INPUT, "NON_FINITE_INPUT"),
+        (Self::OUT_OF_RANGE, "OUT_OF_RANGE"),
+        (Self::ENERGY_OVERFLOW, "ENERGY_OVERFLOW"),
+        (Self::FORCE_OUT_OF_RANGE, "FORCE_OUT_OF_RANGE"),
+    ];
+
+    /// The names of the raised flags, in the order of their bits.
+    pub fn names(self) -> impl Iterator<Item = &'static str> {
+        Self::FLAGS
+            .into_iter()
+            .filter(move |&(flag, _)| self.contains(flag))
+            .map(|(_, name)| name)
+    }
+
+    /// The text of `Display`, in four pieces: per flag of [`Self::FLAGS`],
+    /// its name (after `" | "` when an earlier flag is raised) or `""`.
+    /// One shape for `Display` and `defmt::Format`, which writes each
+    /// formatted value in one call.
+    fn pieces(self) -> [&'static str; 4] {
+        const JOINED: [&str; 4] = [
+            " | NON_FINITE_INPUT",
+            " | OUT_OF_RANGE",
+            " | ENERGY_OVERFLOW",
+            " | FORCE_OUT_OF_RANGE",
+        ];
+        let mut out = [""; 4];
+        let mut first = true;
+        for ((piece, (flag, name)), joined) in out.iter_mut().zip(Self::FLAGS).zip(JOINED) {
+            if self.contains(flag) {
+                *piece = if first { name } else { joined };
+                first = false;
+            }
+        }
+        out
+    }
+}
+
+/// The names of the raised flags joined by `" | "`, or `NONE`.
+impl fmt::Display for Faults {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.is_empty() {
+            return f.write_str("NONE");
+        }
+        self.pieces().iter().try_for_each(|p| f.write_str(p))
+    }
+}
+
+/// `Faults(` the `Display` text `)`.
+impl fmt::Debug for Faults {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Faults({self})")
+    }
+}
+
+/// The `Display` text, decoded on the host.
+#[cfg(feature = "defmt")]
+impl defmt::Format for Faults {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        if self.is_empty() {
+            defmt::write!(f, "NONE");
+        } else {
+            let [a, b, c, d] = self.pieces();
+            defmt::write!(f, "{=str}{=str}{=str}{=str}", a, b, c, d);
+        }
     }
 }
 
@@ -414,5 +499,30 @@ mod tests {
         f.raise(Faults::NON_FINITE_INPUT);
         assert!(f.contains(Faults::OUT_OF_RANGE) && f.contains(Faults::NON_FINITE_INPUT));
         assert_eq!(f.bits(), 3);
+    }
+
+    #[test]
+    fn faults_print_the_names_of_their_flags() {
+        assert_eq!(alloc::format!("{}", Faults::NONE), "NONE");
+        assert_eq!(alloc::format!("{:?}", Faults::NONE), "Faults(NONE)");
+        // Every subset of the four flags: the raised names in bit order.
+        for bits in 0u8..16 {
+            let mut f = Faults::NONE;
+            let mut expected = alloc::vec::Vec::new();
+            for (k, (flag, name)) in Faults::FLAGS.into_iter().enumerate() {
+                if bits & (1 << k) != 0 {
+                    f.raise(flag);
+                    expected.push(name);
+                }
+            }
+            assert_eq!(f.bits(), bits);
+            assert_eq!(f.names().collect::<alloc::vec::Vec<_>>(), expected);
+            let text = if expected.is_empty() {
+                alloc::string::String::from("NONE")
+            } else {
+                expected.join(" | ")
+            };
+            assert_eq!(alloc::format!("{f}"), text);
+        }
     }
 }

@@ -299,6 +299,15 @@ macro_rules! fixed_real {
             }
         }
 
+        /// The value as the nearest `f64` (exact for `Q16`), formatted on
+        /// the host.
+        #[cfg(feature = "defmt")]
+        impl defmt::Format for $name {
+            fn format(&self, f: defmt::Formatter<'_>) {
+                defmt::write!(f, "{=f64}", self.0.to_num::<f64>());
+            }
+        }
+
         impl Add for $name {
             type Output = Self;
             #[inline(always)]

@@ -136,6 +136,7 @@ impl<T: Real, S> OscillatorState<T, S> {
 
 /// The result of one oscillator step.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct OscillatorStep<T> {
     /// Modal displacement p_{n+1}.
     pub p: T,

@@ -88,6 +88,7 @@ pub type Mat3<T> = [Vec3<T>; 3];
 /// A unit quaternion w + v (Hamilton's convention): the active rotation
 /// that turns vectors of a node frame into the global frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Quat<T> {
     /// Scalar part, cos(φ/2).
     pub w: T,
@@ -229,6 +230,7 @@ impl<T: Real> core::ops::Mul for Quat<T> {
 
 /// Position and orientation of a rigid node.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Pose<T> {
     /// Position in the global frame.
     pub position: Vec3<T>,
@@ -239,6 +241,7 @@ pub struct Pose<T> {
 
 /// How the bushing frame is chosen (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Connectivity {
     /// The frame of node 1; the loads depend on the node order.
     Attached,
@@ -248,6 +251,7 @@ pub enum Connectivity {
 
 /// Loads on the two nodes, in the global frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Loads<T> {
     /// Force on node 1 and on node 2.
     pub force: [Vec3<T>; 2],
@@ -257,6 +261,7 @@ pub struct Loads<T> {
 
 /// The result of one 6-DOF step.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SixDofOutput<T> {
     /// Loads on the nodes.
     pub loads: Loads<T>,

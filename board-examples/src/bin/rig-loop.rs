@@ -7,14 +7,20 @@
 //! updates the modal tracker (on the Cortex-M3 the thread-mode loop runs
 //! it on every 20th period). The converters are simulated behind the same
 //! `SpiDevice` trait: the thread-mode loop computes the sweep of
-//! `scenes/rig-loop.toml` ahead into the ADC's queue and prints one line
-//! per period for the comparison with `bushing-sim`:
+//! `scenes/rig-loop.toml` ahead into the ADC's queue and logs one line
+//! per period for the comparison with `bushing-sim`.
+//!
+//! The log is `defmt` frames over semihosting (`bushing_boards::log`),
+//! decoded on the host by `bushing-defmt-log` with this ELF: the interrupt
+//! hands each period's entry to thread mode through a lock-free queue and
+//! never logs, and the logger never masks interrupts, so logging adds
+//! nothing to the interrupt latency. Decoded:
 //!
 //! ```text
 //! rig-loop number=f32 lsb_mm=0.000244140625 rate_hz=5000 part_hz=168000000 budget=33600
 //! step 1 51 4035d941
 //! ...
-//! periods 10000 overruns 0 adc_underruns 0 plant_lead_min 63 ...
+//! periods 10000 overruns 0 adc_underruns 0 plant_lead_min 63 ... faults NONE
 //! ```
 //!
 //! The same source builds for the Cortex-M4F in `f32`
@@ -35,6 +41,7 @@ mod firmware {
     use core::cell::RefCell;
 
     use bushing::Faults;
+    use bushing::tracker::ModeStatus;
     use bushing_boards::memory;
     use bushing_boards::rig::sim::{Plant, SimAdc, SimDac};
     use bushing_boards::rig::{
@@ -45,13 +52,34 @@ mod firmware {
     use cortex_m::peripheral::syst::SystClkSource;
     use cortex_m::peripheral::{SCB, SYST};
     use cortex_m_rt::{entry, exception};
-    use cortex_m_semihosting::hprintln;
-    use heapless::Deque;
-    #[cfg(not(feature = "panic-never"))]
-    use panic_semihosting as _;
+    use heapless::spsc::{Consumer, Producer, Queue};
 
     #[cfg(feature = "panic-never")]
     use panic_never as _;
+
+    /// Logs where the panic happened (no message: formatting it would link
+    /// `core::fmt`) and ends the run with failure.
+    #[cfg(not(feature = "panic-never"))]
+    #[panic_handler]
+    fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
+        match info.location() {
+            Some(at) => fail_at("panic", at.file(), at.line()),
+            None => fail("panic"),
+        }
+    }
+
+    /// Ends the run with `why`: QEMU exits with failure.
+    fn fail(why: &str) -> ! {
+        defmt::println!("error: {=str}", why);
+        bushing_boards::probe::exit(false)
+    }
+
+    /// [`fail`] with a source location.
+    #[cfg(not(feature = "panic-never"))]
+    fn fail_at(why: &str, file: &str, line: u32) -> ! {
+        defmt::println!("error: {=str} at {=str}:{=u32}", why, file, line);
+        bushing_boards::probe::exit(false)
+    }
 
     /// Working type: `f32` with an FPU, `Q16` without.
     #[cfg(target_abi = "eabihf")]
@@ -77,6 +105,8 @@ mod firmware {
     const RAM_BUDGET: usize = 16 * 1024;
     /// Tracker frequency error allowed after the first 0.3 s, ppm.
     const TRACKER_BOUND_PPM: u32 = 10_000;
+    /// Log entries the interrupt can queue ahead of thread mode, plus one.
+    const LOG_SLOTS: usize = 33;
 
     /// One period, as logged by the thread-mode loop.
     #[derive(Clone, Copy)]
@@ -105,11 +135,12 @@ mod firmware {
         /// update: worst and sum.
         latency_worst: u32,
         output_worst: u32,
-        output_sum: u64,
+        output_sum: u32,
         total_worst: u32,
-        total_sum: u64,
+        total_sum: u32,
         faults: Faults,
-        log: Deque<Entry, 32>,
+        /// The interrupt's end of the log queue.
+        log: Producer<'static, Entry>,
         dropped: u32,
     }
 
@@ -161,9 +192,9 @@ mod firmware {
             // At most `last`: no overflow.
             self.periods += 1;
             self.output_worst = self.output_worst.max(output);
-            self.output_sum = self.output_sum.saturating_add(u64::from(output));
+            self.output_sum = self.output_sum.saturating_add(output);
             self.total_worst = self.total_worst.max(total);
-            self.total_sum = self.total_sum.saturating_add(u64::from(total));
+            self.total_sum = self.total_sum.saturating_add(total);
             if let Some((code, bits)) = entry {
                 let e = Entry {
                     period: self.periods,
@@ -171,7 +202,7 @@ mod firmware {
                     bits,
                     frequency,
                 };
-                if self.log.push_back(e).is_err() {
+                if self.log.enqueue(e).is_err() {
                     self.dropped = self.dropped.saturating_add(1);
                 }
             }
@@ -193,7 +224,7 @@ mod firmware {
         });
     }
 
-    fn build(plant: &Plant) -> Result<Loop, bushing::ParamError> {
+    fn build(plant: &Plant, log: Producer<'static, Entry>) -> Result<Loop, bushing::ParamError> {
         let rig = Rig::<Num>::new()?;
         let state = rig.start(plant.code(0));
         let monitor = if TRACK { Some(Monitor::new(1)?) } else { None };
@@ -213,14 +244,13 @@ mod firmware {
             total_worst: 0,
             total_sum: 0,
             faults: Faults::default(),
-            log: Deque::new(),
+            log,
             dropped: 0,
         })
     }
 
-    /// What thread mode takes from the interrupt in one pass.
-    struct Drained {
-        entries: Deque<Entry, 32>,
+    /// What thread mode learns from the interrupt in one pass.
+    struct Exchanged {
         /// The offered code went into the ADC queue.
         fed: bool,
         /// Codes queued before the offer.
@@ -231,8 +261,14 @@ mod firmware {
     /// Builds the loop into [`LOOP`] with the ADC queue filled; returns
     /// the next period whose code is to be queued.
     #[inline(never)]
-    fn setup(plant: &Plant) -> Result<u32, &'static str> {
-        let mut lp = build(plant).map_err(|_| "rig parameters refused")?;
+    fn setup(plant: &Plant, log: Producer<'static, Entry>) -> Result<u32, &'static str> {
+        let mut lp = match build(plant, log) {
+            Ok(lp) => lp,
+            Err(e) => {
+                defmt::println!("rig parameters refused: {}", e);
+                return Err("rig parameters refused");
+            }
+        };
         let mut next = 1u32;
         while next <= plant.steps() && lp.adc.device_mut().feed(plant.code(next)) {
             next += 1;
@@ -247,13 +283,13 @@ mod firmware {
         })
     }
 
-    /// Offers `code` to the ADC queue and takes the log, in one critical
-    /// section.
+    /// Offers `code` to the ADC queue, in a critical section of a few
+    /// dozen instructions (the log entries come through their own
+    /// lock-free queue).
     #[inline(never)]
-    fn exchange(code: Option<i16>) -> Drained {
+    fn exchange(code: Option<i16>) -> Exchanged {
         interrupt::free(|cs| {
-            let mut out = Drained {
-                entries: Deque::new(),
+            let mut out = Exchanged {
                 fed: false,
                 queued: 0,
                 done: true,
@@ -263,7 +299,6 @@ mod firmware {
             {
                 out.queued = l.adc.device().queued();
                 out.fed = code.is_some_and(|c| l.adc.device_mut().feed(c));
-                out.entries = core::mem::take(&mut l.log);
                 out.done = l.periods >= l.last;
             }
             out
@@ -272,23 +307,27 @@ mod firmware {
 
     #[entry]
     fn main() -> ! {
+        // The log queue: the interrupt's producer, thread mode's consumer
+        // (cortex-m-rt makes this a `&'static mut`).
+        static mut LOG: Queue<Entry, LOG_SLOTS> = Queue::new();
         memory::paint_stack();
         let Some(mut core) = cortex_m::Peripherals::take() else {
-            bushing_boards::probe::fail("core peripherals already taken")
+            fail("core peripherals already taken")
         };
         let Ok(plant) = Plant::new() else {
-            bushing_boards::probe::fail("sweep refused")
+            fail("sweep refused")
         };
-        let mut next = match setup(&plant) {
+        let (producer, mut entries): (_, Consumer<'static, Entry>) = LOG.split();
+        let mut next = match setup(&plant, producer) {
             Ok(n) => n,
-            Err(why) => bushing_boards::probe::fail(why),
+            Err(why) => fail(why),
         };
         // Stack of the set-up, then of the running loop alone.
         let setup_stack = memory::stack_high_water();
         memory::paint_stack();
 
-        hprintln!(
-            "rig-loop number={} lsb_mm={} rate_hz={} part_hz={} budget={}",
+        defmt::println!(
+            "rig-loop number={=str} lsb_mm={=str} rate_hz={=u32} part_hz={=u32} budget={=u32}",
             if TRACK { "f32" } else { "q16" },
             LSB_MM_TEXT,
             RATE_HZ as u32,
@@ -312,21 +351,21 @@ mod firmware {
         } else {
             match Monitor::new(TRACKER_EVERY) {
                 Ok(m) => Some(m),
-                Err(_) => bushing_boards::probe::fail("tracker parameters refused"),
+                Err(_) => fail("tracker parameters refused"),
             }
         };
         loop {
             // The next code, computed outside the critical section.
             let code = (next <= plant.steps()).then(|| plant.code(next));
-            let drained = exchange(code);
+            let exchanged = exchange(code);
             if code.is_some() {
-                lead = lead.min(drained.queued);
+                lead = lead.min(exchanged.queued);
             }
-            if drained.fed {
+            if exchanged.fed {
                 next += 1;
             }
-            for e in &drained.entries {
-                hprintln!("step {} {} {:08x}", e.period, e.code, e.bits);
+            while let Some(e) = entries.dequeue() {
+                defmt::println!("step {=u32} {=i16} {=u32:08x}", e.period, e.code, e.bits);
                 let mut frequency = e.frequency;
                 if let Some(m) = thread_monitor.as_mut() {
                     // Only built without an FPU, where TRACKER_EVERY is this.
@@ -341,11 +380,13 @@ mod firmware {
                     worst_tracking = worst_tracking.max((frequency - f).abs() / f);
                 }
             }
-            if drained.done && drained.entries.is_empty() {
+            // The interrupt queues a period's entry before it returns, so
+            // once every period has run the queue was drained above.
+            if exchanged.done {
                 break;
             }
             // Sleep until the next period when the queue is full.
-            if !drained.fed {
+            if !exchanged.fed {
                 cortex_m::asm::wfi();
             }
         }
@@ -359,8 +400,12 @@ mod firmware {
                 .and_then(|l| l.as_ref().map(Loop::summary))
         });
         match summary {
-            Some(s) => report(&s, worst_tracking, lead, setup_stack, loop_stack),
-            None => bushing_boards::probe::fail("loop state lost"),
+            Some(s) => {
+                // The last estimate of the tracker, wherever it ran.
+                let mode = s.mode.or(thread_monitor.as_ref().map(Monitor::mode));
+                report(&s, mode, worst_tracking, lead, setup_stack, loop_stack)
+            }
+            None => fail("loop state lost"),
         }
     }
 
@@ -375,11 +420,13 @@ mod firmware {
         underruns: u32,
         conversions: u32,
         faults: Faults,
+        /// The interrupt's tracker's last estimate (on FPU targets).
+        mode: Option<ModeStatus<f32>>,
         latency_worst: u32,
         output_worst: u32,
-        output_sum: u64,
+        output_sum: u32,
         total_worst: u32,
-        total_sum: u64,
+        total_sum: u32,
     }
 
     impl Loop {
@@ -393,6 +440,7 @@ mod firmware {
                 underruns: self.adc.device().underruns(),
                 conversions: self.adc.device().conversions(),
                 faults: self.faults,
+                mode: self.monitor.as_ref().map(Monitor::mode),
                 latency_worst: self.latency_worst,
                 output_worst: self.output_worst,
                 output_sum: self.output_sum,
@@ -404,12 +452,15 @@ mod firmware {
 
     fn report(
         l: &Summary,
+        mode: Option<ModeStatus<f32>>,
         worst_tracking: f32,
         lead: usize,
         setup_stack: usize,
         stack: usize,
     ) -> ! {
-        let n = u64::from(l.periods.max(1));
+        // Sums of ticks: at most 10 000 periods of 840 ticks, far from
+        // u32::MAX even in instructions (no 64-bit division linked).
+        let n = l.periods.max(1);
         // `as` saturates: a NaN or huge error reads as 0 or u32::MAX.
         let tracking_ppm = if worst_tracking.is_nan() {
             u32::MAX
@@ -419,8 +470,9 @@ mod firmware {
         let flash = memory::flash_bytes();
         let ram = memory::static_ram_bytes();
         let (underruns, conversions) = (l.underruns, l.conversions);
-        hprintln!(
-            "periods {} overruns {} adc_underruns {} plant_lead_min {} conversions {} transfer_errors {} dropped_log {} faults {:#x}",
+        let log_dropped = bushing_boards::log::dropped_frames();
+        defmt::println!(
+            "periods {=u32} overruns {=u32} adc_underruns {=u32} plant_lead_min {=usize} conversions {=u32} transfer_errors {=u32} dropped_log {=u32} dropped_frames {=u32} faults {}",
             l.periods,
             l.overruns,
             underruns,
@@ -428,20 +480,21 @@ mod firmware {
             conversions,
             l.errors,
             l.dropped,
-            l.faults.bits()
+            log_dropped,
+            l.faults
         );
-        hprintln!(
-            "instructions latency_worst {} to_dac_mean {} to_dac_worst {} period_mean {} period_worst {} budget {} (±{} per figure)",
+        defmt::println!(
+            "instructions latency_worst {=u32} to_dac_mean {=u32} to_dac_worst {=u32} period_mean {=u32} period_worst {=u32} budget {=u32} (±{=u32} per figure)",
             l.latency_worst * PER_TICK,
-            l.output_sum * u64::from(PER_TICK) / n,
+            l.output_sum.saturating_mul(PER_TICK) / n,
             l.output_worst * PER_TICK,
-            l.total_sum * u64::from(PER_TICK) / n,
+            l.total_sum.saturating_mul(PER_TICK) / n,
             l.total_worst * PER_TICK,
             BUDGET,
             PER_TICK
         );
-        hprintln!(
-            "memory flash {} static_ram {} stack_loop {} stack_setup {} flash_budget {} ram_budget {}",
+        defmt::println!(
+            "memory flash {=usize} static_ram {=usize} stack_loop {=usize} stack_setup {=usize} flash_budget {=usize} ram_budget {=usize}",
             flash,
             ram,
             stack,
@@ -449,26 +502,28 @@ mod firmware {
             FLASH_BUDGET,
             RAM_BUDGET
         );
-        hprintln!(
-            "tracker every {} worst_frequency_error_ppm {} bound_ppm {}",
+        defmt::println!(
+            "tracker every {=u32} worst_frequency_error_ppm {=u32} bound_ppm {=u32} last {}",
             TRACKER_EVERY,
             tracking_ppm,
-            TRACKER_BOUND_PPM
+            TRACKER_BOUND_PPM,
+            mode
         );
         let ok = l.periods == l.last
             && l.overruns == 0
             && underruns == 0
             && l.errors == 0
             && l.dropped == 0
+            && log_dropped == 0
             && l.faults.is_empty()
             && flash <= FLASH_BUDGET
             && ram <= RAM_BUDGET
             && tracking_ppm <= TRACKER_BOUND_PPM;
         if ok {
-            hprintln!("verdict pass");
-            bushing_boards::probe::pass()
+            defmt::println!("verdict pass");
+            bushing_boards::probe::exit(true)
         } else {
-            bushing_boards::probe::fail("verdict fail")
+            fail("verdict fail")
         }
     }
 }

@@ -57,6 +57,7 @@ use crate::error::{Param, ParamError, positive};
 
 /// Why a record could not be fitted.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FitError {
     /// A parameter is out of range (dt, the mode list, the output lengths).
     Param(ParamError),

@@ -114,6 +114,7 @@ pub struct Channel {
 
 /// Why a sample was refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Refused {
     /// A sample was NaN or infinite.
     NonFiniteSample,
@@ -496,6 +497,7 @@ pub struct ModulusSpec {
 /// Complex modulus `K* = K' + i K''` (seed 000 eq 1.5), force over
 /// displacement units.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Modulus<T> {
     /// Storage modulus K'.
     pub storage: T,

@@ -6,6 +6,7 @@ use crate::error::{Param, ParamError, in_range};
 
 /// What a sensor measures of the motion.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Measured {
     /// Displacement (eq 3.26).
     #[default]
@@ -193,6 +194,7 @@ pub struct ModeInit {
 
 /// What the tracker says of one mode (post-processing of eq 3.7).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ModeStatus<T> {
     /// Natural frequency f_0 = ω_0 / 2π, Hz.
     pub frequency: T,
@@ -208,6 +210,7 @@ pub struct ModeStatus<T> {
 
 /// Counters of one step.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ModalReport {
     /// Sensors whose sample updated the state.
     pub accepted: u8,
