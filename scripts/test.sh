@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The project's test command. On a machine that has only Rust it installs
-# what is missing (Cortex-M targets, clippy/rustfmt, QEMU, valgrind), then
+# what is missing (Cortex-M targets, clippy/rustfmt, QEMU, valgrind, gcc and
+# arm-none-eabi-gcc), then
 # runs:
 #   1. formatting and lints (host, and the Cortex-M crates for the target);
 #   2. core-nostd builds for Cortex-M4F (thumbv7em-none-eabihf) and
@@ -15,7 +16,8 @@
 #   5. the host tests (unit, integration, doc), the firmware drivers on
 #      embedded-hal-mock, and the rig loop of scripts/rig-loop.sh: both
 #      firmwares in QEMU against bushing-sim (their defmt logs decoded),
-#      and the panic-never link check;
+#      and the panic-never link check; then the C API of scripts/c-api.sh
+#      (the header, a host C test, the C rig loop in QEMU);
 #   6. every scene of scenes/ run with the README's command form;
 #   7. a scene's cost against its parts in host instructions (callgrind),
 #      printed, never asserted.
@@ -44,6 +46,8 @@ done
 
 missing=()
 command -v qemu-system-arm >/dev/null 2>&1 || missing+=(qemu-system-arm)
+command -v gcc >/dev/null 2>&1 || missing+=(gcc)
+command -v arm-none-eabi-gcc >/dev/null 2>&1 || missing+=(gcc-arm-none-eabi)
 command -v valgrind >/dev/null 2>&1 || missing+=(valgrind)
 if [ ${#missing[@]} -gt 0 ]; then
     step "installing ${missing[*]}"
@@ -52,6 +56,7 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 qemu-system-arm --version | head -n 1
 valgrind --version
+arm-none-eabi-gcc --version | head -n 1
 
 . scripts/target-dir.sh
 echo "cargo builds into $target"
@@ -72,6 +77,8 @@ cargo clippy -p bushing --features micromath --target thumbv7em-none-eabihf -- -
 cargo clippy -p bushing --features fixed --target thumbv7m-none-eabi -- -D warnings
 cargo clippy -p bushing --features serde --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing --features defmt,fixed --target thumbv7m-none-eabi -- -D warnings
+cargo clippy -p bushing-c --target thumbv7em-none-eabihf -- -D warnings
+cargo clippy -p bushing-c --target thumbv7m-none-eabi -- -D warnings
 cargo clippy -p bushing-kernels --target thumbv7em-none-eabihf -- -D warnings
 cargo clippy -p bushing-kernels --features fixed --target thumbv7m-none-eabi -- -D warnings
 cargo clippy -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m --test hard_cases -- -D warnings
@@ -106,6 +113,9 @@ cargo test -p bushing-boards --lib
 
 step "rig-loop firmware in QEMU against bushing-sim, panic-never link check"
 ./scripts/rig-loop.sh
+
+step "C API: header, host C test, the C rig loop in QEMU against the Rust one"
+./scripts/c-api.sh
 
 step "fuzz targets build (run them with cargo fuzz: docs/hard-cases.md)"
 cargo check --quiet --manifest-path fuzz/Cargo.toml --target-dir "$target/fuzz-check"
