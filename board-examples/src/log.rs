@@ -47,6 +47,18 @@ struct Sink {
 }
 
 impl Sink {
+    /// Runs `f` with the encoder and a writer of its output into the
+    /// buffer.
+    fn encode(&mut self, f: impl FnOnce(&mut defmt::Encoder, &mut dyn FnMut(&[u8]))) {
+        let Self {
+            encoder,
+            stream,
+            buffer,
+            len,
+        } = self;
+        f(encoder, &mut |b| Self::push(buffer, len, stream, b));
+    }
+
     /// Appends encoded bytes, writing the buffer out whenever it fills.
     /// Not inlined: one copy for the three callers (flash).
     #[inline(never)]
@@ -117,13 +129,7 @@ unsafe impl defmt::Logger for Logger {
             if sink.stream.is_none() {
                 sink.stream = hio::hstdout().ok();
             }
-            let Sink {
-                encoder,
-                stream,
-                buffer,
-                len,
-            } = sink;
-            encoder.start_frame(|b| Sink::push(buffer, len, stream, b));
+            sink.encode(|e, w| e.start_frame(w));
         });
     }
 
@@ -131,28 +137,14 @@ unsafe impl defmt::Logger for Logger {
 
     unsafe fn release() {
         with_sink(|sink| {
-            let Sink {
-                encoder,
-                stream,
-                buffer,
-                len,
-            } = sink;
-            encoder.end_frame(|b| Sink::push(buffer, len, stream, b));
-            Sink::write_out(buffer, len, stream);
+            sink.encode(|e, w| e.end_frame(w));
+            Sink::write_out(&sink.buffer, &mut sink.len, &mut sink.stream);
         });
         DEPTH.fetch_sub(1, Ordering::Release);
     }
 
     unsafe fn write(bytes: &[u8]) {
-        with_sink(|sink| {
-            let Sink {
-                encoder,
-                stream,
-                buffer,
-                len,
-            } = sink;
-            encoder.write(bytes, |b| Sink::push(buffer, len, stream, b));
-        });
+        with_sink(|sink| sink.encode(|e, w| e.write(bytes, w)));
     }
 }
 

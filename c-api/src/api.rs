@@ -209,21 +209,20 @@ where
     })())
 }
 
-/// `step` of one number type.
+/// The body of every `step` call: the model read, the state advanced by
+/// `f`, its output written. A null `out` is refused before the state
+/// moves.
 ///
 /// # Safety
 ///
-/// The contract of `bushing_f32_step`.
-unsafe fn step<N: CNumber, M, S>(
+/// `model` set by `init` and only read, `state` set by `reset` and
+/// referenced by nothing else, `out` writable; none overlap.
+pub(crate) unsafe fn step_with<M: Storage, S: Storage, O>(
     model: *const M,
     state: *mut S,
-    x: N::C,
-    out: *mut N::Out,
-) -> BushingStatusCode
-where
-    M: Storage<Value = Model<N>>,
-    S: Storage<Value = State<N>>,
-{
+    out: *mut O,
+    f: impl FnOnce(&M::Value, &mut S::Value) -> (O, BushingStatus),
+) -> BushingStatusCode {
     if out.is_null() {
         return BushingStatus::NullPointer.code();
     }
@@ -233,38 +232,43 @@ where
         // SAFETY: `state` was set by `reset`, and nothing else references
         // it during the call (the contract).
         let s = unsafe { ffi::get_mut(state) }?;
-        let o = m.step(s, N::from_c(x));
+        let (o, done) = f(m, s);
         // SAFETY: `out` is writable and overlaps neither (the contract).
-        unsafe { ffi::output(out, N::output(&o)) }?;
-        Ok(accepted(&o))
+        unsafe { ffi::output(out, o) }?;
+        Ok(done)
     })())
 }
 
-/// `trial` of one number type.
+/// The body of every `trial` call: [`step_with`] on a copy of the state.
 ///
 /// # Safety
 ///
-/// The contract of `bushing_f32_trial`.
-unsafe fn trial<N: CNumber, M, S>(
+/// As [`step_with`], `state` only read.
+pub(crate) unsafe fn trial_with<M: Storage, S: Storage, O>(
     model: *const M,
     state: *const S,
-    x: N::C,
-    out: *mut N::Out,
+    out: *mut O,
+    f: impl FnOnce(&M::Value, &mut S::Value) -> (O, BushingStatus),
 ) -> BushingStatusCode
 where
-    M: Storage<Value = Model<N>>,
-    S: Storage<Value = State<N>>,
+    S::Value: Clone,
 {
     status((|| {
         // SAFETY: `model` was set by `init` and is only read (the contract).
         let m = unsafe { ffi::get(model) }?;
-        // SAFETY: `state` was set by `reset` and is only read.
-        let s = unsafe { ffi::get(state) }?;
-        let (o, _) = m.trial(s, N::from_c(x));
+        // SAFETY: `state` was set by `reset` and is only read (copied).
+        let mut s = unsafe { ffi::get(state) }?.clone();
+        let (o, done) = f(m, &mut s);
         // SAFETY: `out` is writable and overlaps neither (the contract).
-        unsafe { ffi::output(out, N::output(&o)) }?;
-        Ok(accepted(&o))
+        unsafe { ffi::output(out, o) }?;
+        Ok(done)
     })())
+}
+
+/// One bushing step of one number type: its output and status.
+fn advance<N: CNumber>(m: &Model<N>, s: &mut State<N>, x: N::C) -> (N::Out, BushingStatus) {
+    let o = m.step(s, N::from_c(x));
+    (N::output(&o), accepted(&o))
 }
 
 /// `faults` of one number type.
@@ -385,7 +389,7 @@ pub unsafe extern "C" fn bushing_f32_step(
     out: *mut BushingF32Output,
 ) -> BushingStatusCode {
     // SAFETY: the same contract.
-    unsafe { step(model, state, x, out) }
+    unsafe { step_with(model, state, out, |m, s| advance::<f32>(m, s, x)) }
 }
 
 /// The output `step` would give, `state` left unchanged.
@@ -401,7 +405,7 @@ pub unsafe extern "C" fn bushing_f32_trial(
     out: *mut BushingF32Output,
 ) -> BushingStatusCode {
     // SAFETY: the same contract.
-    unsafe { trial(model, state, x, out) }
+    unsafe { trial_with(model, state, out, |m, s| advance::<f32>(m, s, x)) }
 }
 
 /// The sticky fault flags of `state` (`BUSHING_FAULT_*`) into `flags`.
@@ -474,7 +478,7 @@ pub unsafe extern "C" fn bushing_q16_step(
     out: *mut BushingQ16Output,
 ) -> BushingStatusCode {
     // SAFETY: the same contract.
-    unsafe { step(model, state, x, out) }
+    unsafe { step_with(model, state, out, |m, s| advance::<Q16>(m, s, x)) }
 }
 
 /// `bushing_f32_trial` in Q16.
@@ -490,7 +494,7 @@ pub unsafe extern "C" fn bushing_q16_trial(
     out: *mut BushingQ16Output,
 ) -> BushingStatusCode {
     // SAFETY: the same contract.
-    unsafe { trial(model, state, x, out) }
+    unsafe { trial_with(model, state, out, |m, s| advance::<Q16>(m, s, x)) }
 }
 
 /// `bushing_f32_faults` in Q16.

@@ -303,14 +303,163 @@ impl<T: Real> Effect<T> for Friction<T> {
     }
 }
 
-/// The effects of a C bushing, in the order they are summed.
-pub(crate) type Effects<T> = (
-    Option<Maxwell<T>>,
-    Option<Iwan<T>>,
-    Option<Xf<T>>,
-    Option<TurningPoints<Sts<T>, BUSHING_STS_POINTS>>,
-    Option<Friction<T>>,
-);
+/// The STS turning-point stack of a C bushing.
+type StsStack<T> = TurningPoints<Sts<T>, BUSHING_STS_POINTS>;
+
+/// The effects of a C bushing: those the spec names, stepped in the
+/// order Maxwell, Iwan, x_f, STS, friction. Their outputs are summed from
+/// the first present one, as the core's tuple of the same effects sums
+/// them; an absent effect adds nothing and costs one branch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Effects<T: Real> {
+    maxwell: Option<Maxwell<T>>,
+    iwan: Option<Iwan<T>>,
+    xf: Option<Xf<T>>,
+    sts: Option<StsStack<T>>,
+    friction: Option<Friction<T>>,
+}
+
+/// A copy of `x` when `on` (an effect's state kept aside for a refused
+/// step; none for an absent effect).
+#[inline(always)]
+fn kept<X: Copy>(on: bool, x: &X) -> Option<X> {
+    if on { Some(*x) } else { None }
+}
+
+/// Puts a state kept by [`kept`] back.
+#[inline(always)]
+fn put_back<X>(slot: &mut X, saved: Option<X>) {
+    if let Some(x) = saved {
+        *slot = x;
+    }
+}
+
+/// The states of [`Effects`] (an absent effect's is never read).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct EffectsState<T: Real> {
+    maxwell: <Maxwell<T> as Effect<T>>::State,
+    iwan: <Iwan<T> as Effect<T>>::State,
+    xf: <Xf<T> as Effect<T>>::State,
+    sts: Option<<StsStack<T> as Effect<T>>::State>,
+    friction: Option<<Friction<T> as Effect<T>>::State>,
+}
+
+/// A step of [`Effects`]: the summed output and the sum of each effect's
+/// `|force| + |tangent|` (the bushing's guard on every effect).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Report<T> {
+    total: Option<EffectOutput<T>>,
+    magnitude: T,
+}
+
+impl<T: Real> Report<T> {
+    /// Adds one effect's output.
+    #[inline(always)]
+    fn add(&mut self, o: EffectOutput<T>) {
+        let m = o.force.abs() + o.tangent.abs();
+        (self.total, self.magnitude) = match self.total {
+            None => (Some(o), m),
+            Some(t) => (
+                Some(EffectOutput {
+                    force: t.force + o.force,
+                    tangent: t.tangent + o.tangent,
+                    dissipated: t.dissipated + o.dissipated,
+                }),
+                self.magnitude + m,
+            ),
+        };
+    }
+}
+
+impl<T: Real> Effect<T> for Effects<T> {
+    type State = EffectsState<T>;
+    type Report = Report<T>;
+
+    fn fraction(&self) -> f64 {
+        let parts = [
+            self.maxwell.fraction(),
+            self.iwan.fraction(),
+            self.xf.fraction(),
+            self.sts.fraction(),
+            self.friction.fraction(),
+        ];
+        parts.iter().sum()
+    }
+    fn dt(&self) -> Option<f64> {
+        self.check_dt(None).ok().flatten()
+    }
+    fn check_dt(&self, dt: Option<f64>) -> Result<Option<f64>, ParamError> {
+        let dt = self.maxwell.check_dt(dt)?;
+        let dt = self.iwan.check_dt(dt)?;
+        let dt = self.xf.check_dt(dt)?;
+        let dt = self.sts.check_dt(dt)?;
+        self.friction.check_dt(dt)
+    }
+    fn rest(&self, x0: T) -> Self::State {
+        EffectsState {
+            maxwell: [Plain::default(); BUSHING_MAX_MAXWELL],
+            iwan: ([T::ZERO; BUSHING_MAX_IWAN], Held::default()),
+            xf: [T::ZERO; BUSHING_MAX_XF],
+            sts: self.sts.rest(x0),
+            friction: self.friction.rest(x0),
+        }
+    }
+    #[inline(always)]
+    fn step(&self, state: &mut Self::State, drive: &Drive<T>) -> Report<T> {
+        let mut r = Report {
+            total: None,
+            magnitude: T::ZERO,
+        };
+        if let Some(e) = &self.maxwell {
+            r.add(e.step(&mut state.maxwell, drive));
+        }
+        if let Some(e) = &self.iwan {
+            r.add(e.step(&mut state.iwan, drive));
+        }
+        if let Some(e) = &self.xf {
+            r.add(e.step(&mut state.xf, drive));
+        }
+        if let (Some(e), Some(s)) = (&self.sts, &mut state.sts) {
+            r.add(e.step(s, drive));
+        }
+        if let (Some(e), Some(s)) = (&self.friction, &mut state.friction) {
+            r.add(e.step(s, drive));
+        }
+        r
+    }
+    fn total(report: &Report<T>) -> EffectOutput<T> {
+        report.total.unwrap_or(EffectOutput::zero())
+    }
+    fn magnitude(report: &Report<T>) -> T {
+        report.magnitude
+    }
+    /// Steps every present effect after keeping its state aside, and puts
+    /// them back if `accept` refuses the report (a refused step is rare:
+    /// the copies are a few words for the banks).
+    #[inline(always)]
+    fn step_if(
+        &self,
+        state: &mut Self::State,
+        drive: &Drive<T>,
+        accept: impl FnOnce(&Report<T>) -> bool,
+    ) -> Option<Report<T>> {
+        let maxwell = kept(self.maxwell.is_some(), &state.maxwell);
+        let iwan = kept(self.iwan.is_some(), &state.iwan);
+        let xf = kept(self.xf.is_some(), &state.xf);
+        let sts = kept(self.sts.is_some(), &state.sts);
+        let friction = kept(self.friction.is_some(), &state.friction);
+        let report = self.step(state, drive);
+        if accept(&report) {
+            return Some(report);
+        }
+        put_back(&mut state.maxwell, maxwell);
+        put_back(&mut state.iwan, iwan);
+        put_back(&mut state.xf, xf);
+        put_back(&mut state.sts, sts);
+        put_back(&mut state.friction, friction);
+        None
+    }
+}
 
 /// A C bushing.
 pub(crate) type Model<T> = Bushing<T, AnyBackbone<T>, Effects<T>>;
@@ -514,12 +663,12 @@ fn friction<T: Real>(spec: &BushingSpec) -> Result<Option<Friction<T>>, BushingE
 /// The bushing of `spec`, every parameter checked by the core's
 /// constructors.
 pub(crate) fn build<T: Real>(spec: &BushingSpec) -> Result<Model<T>, BushingError> {
-    let effects = (
-        maxwell(spec)?,
-        iwan(spec)?,
-        xf(spec)?,
-        sts(spec)?,
-        friction(spec)?,
-    );
+    let effects = Effects {
+        maxwell: maxwell(spec)?,
+        iwan: iwan(spec)?,
+        xf: xf(spec)?,
+        sts: sts(spec)?,
+        friction: friction(spec)?,
+    };
     Ok(Bushing::new(backbone(spec)?, effects)?)
 }

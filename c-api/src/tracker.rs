@@ -11,7 +11,7 @@ use bushing::tracker::{
     ModulusSpec, ModulusState, ModulusTracker, SensorSpec, SineSpec, Tuning, UtParams,
 };
 
-use crate::api::{init, status as code};
+use crate::api::{init, status as code, step_with, trial_with};
 use crate::ffi::{self, Storage};
 use crate::status::{BushingError, BushingStatus, BushingStatusCode};
 
@@ -300,6 +300,27 @@ fn refused_or_ok(refused: bool) -> BushingStatus {
     }
 }
 
+/// One sample into `s`: the report and the call's status.
+fn track(
+    t: &ModalTracker<f32, 4>,
+    s: &mut ModalState<f32, 4>,
+    sample: f32,
+) -> (BushingTrackerReport, BushingStatus) {
+    let r = t.step(s, &[sample]);
+    (report(r, t.mode(s, 0)), refused_or_ok(r.refused))
+}
+
+/// One sample pair into `s`: the modulus and the call's status.
+fn measure(
+    t: &ModulusTracker<f32>,
+    s: &mut ModulusState<f32>,
+    displacement: f32,
+    force: f32,
+) -> (BushingModulus, BushingStatus) {
+    let refused = t.step(s, displacement, force).is_err();
+    (modulus(t, s), refused_or_ok(refused))
+}
+
 fn report(r: ModalReport, m: ModeStatus<f32>) -> BushingTrackerReport {
     BushingTrackerReport {
         frequency_hz: m.frequency,
@@ -403,20 +424,8 @@ pub unsafe extern "C" fn bushing_tracker_step(
     sample: f32,
     out: *mut BushingTrackerReport,
 ) -> BushingStatusCode {
-    if out.is_null() {
-        return BushingStatus::NullPointer.code();
-    }
-    code((|| {
-        // SAFETY: `tracker` was set by `init` and is only read.
-        let t = unsafe { ffi::get(tracker) }?;
-        // SAFETY: `state` was set by `reset`, and nothing else references
-        // it during the call.
-        let s = unsafe { ffi::get_mut(state) }?;
-        let r = t.step(s, &[sample]);
-        // SAFETY: `out` is writable and overlaps neither.
-        unsafe { ffi::output(out, report(r, t.mode(s, 0))) }?;
-        Ok(refused_or_ok(r.refused))
-    })())
+    // SAFETY: the same contract as `step_with`'s.
+    unsafe { step_with(tracker, state, out, |t, s| track(t, s, sample)) }
 }
 
 /// The report `step` would give, `state` left unchanged (a copy of the
@@ -432,16 +441,8 @@ pub unsafe extern "C" fn bushing_tracker_trial(
     sample: f32,
     out: *mut BushingTrackerReport,
 ) -> BushingStatusCode {
-    code((|| {
-        // SAFETY: `tracker` was set by `init` and is only read.
-        let t = unsafe { ffi::get(tracker) }?;
-        // SAFETY: `state` was set by `reset` and is only read (copied).
-        let mut s = unsafe { ffi::get(state) }?.clone();
-        let r = t.step(&mut s, &[sample]);
-        // SAFETY: `out` is writable and overlaps neither.
-        unsafe { ffi::output(out, report(r, t.mode(&s, 0))) }?;
-        Ok(refused_or_ok(r.refused))
-    })())
+    // SAFETY: the same contract as `trial_with`'s.
+    unsafe { trial_with(tracker, state, out, |t, s| track(t, s, sample)) }
 }
 
 /// The tracker's counters since its reset: outliers, covariance repairs
@@ -536,20 +537,12 @@ pub unsafe extern "C" fn bushing_modulus_step(
     force: f32,
     out: *mut BushingModulus,
 ) -> BushingStatusCode {
-    if out.is_null() {
-        return BushingStatus::NullPointer.code();
+    // SAFETY: the same contract as `step_with`'s.
+    unsafe {
+        step_with(tracker, state, out, |t, s| {
+            measure(t, s, displacement, force)
+        })
     }
-    code((|| {
-        // SAFETY: `tracker` was set by `init` and is only read.
-        let t = unsafe { ffi::get(tracker) }?;
-        // SAFETY: `state` was set by `reset`, and nothing else references
-        // it during the call.
-        let s = unsafe { ffi::get_mut(state) }?;
-        let refused = t.step(s, displacement, force).is_err();
-        // SAFETY: `out` is writable and overlaps neither.
-        unsafe { ffi::output(out, modulus(t, s)) }?;
-        Ok(refused_or_ok(refused))
-    })())
 }
 
 /// The modulus `step` would give, `state` left unchanged.
@@ -565,16 +558,12 @@ pub unsafe extern "C" fn bushing_modulus_trial(
     force: f32,
     out: *mut BushingModulus,
 ) -> BushingStatusCode {
-    code((|| {
-        // SAFETY: `tracker` was set by `init` and is only read.
-        let t = unsafe { ffi::get(tracker) }?;
-        // SAFETY: `state` was set by `reset` and is only read (copied).
-        let mut s = unsafe { ffi::get(state) }?.clone();
-        let refused = t.step(&mut s, displacement, force).is_err();
-        // SAFETY: `out` is writable and overlaps neither.
-        unsafe { ffi::output(out, modulus(t, &s)) }?;
-        Ok(refused_or_ok(refused))
-    })())
+    // SAFETY: the same contract as `trial_with`'s.
+    unsafe {
+        trial_with(tracker, state, out, |t, s| {
+            measure(t, s, displacement, force)
+        })
+    }
 }
 
 /// The modulus tracker's counters: refused sample pairs and covariance
