@@ -18,8 +18,11 @@
 #      firmwares in QEMU against bushing-sim (their defmt logs decoded),
 #      and the panic-never link check; then the C API of scripts/c-api.sh
 #      (the header, a host C test, the C rig loop in QEMU);
-#   6. every scene of scenes/ run with the README's command form;
-#   7. a scene's cost against its parts in host instructions (callgrind),
+#   6. the core as a crate a firmware engineer picks up: its package
+#      files, `cargo publish --dry-run`, its docs with every feature and
+#      no rustdoc warning, its doctests;
+#   7. every scene of scenes/ run with the README's command form;
+#   8. a scene's cost against its parts in host instructions (callgrind),
 #      printed, never asserted.
 # Costs and timings are printed, never asserted.
 set -euo pipefail
@@ -116,6 +119,13 @@ step "rig-loop firmware in QEMU against bushing-sim, panic-never link check"
 
 step "C API: header, host C test, the C rig loop in QEMU against the Rust one"
 ./scripts/c-api.sh
+
+step "the core as a published crate: files, publish dry run, docs and doctests with every feature"
+cargo package --list -p bushing | tr '\n' ' ' | fold -w 100 -s
+echo
+cargo publish --dry-run -p bushing
+RUSTDOCFLAGS="-D rustdoc::all" cargo doc -p bushing --all-features --no-deps
+cargo test --doc -p bushing --all-features
 
 step "fuzz targets build (run them with cargo fuzz: docs/hard-cases.md)"
 cargo check --quiet --manifest-path fuzz/Cargo.toml --target-dir "$target/fuzz-check"

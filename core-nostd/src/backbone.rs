@@ -30,6 +30,19 @@ pub trait Backbone<T: Real> {
 ///   polynomial otherwise with [`ParamError::TangentNotPositive`].
 /// - Cost: Horner on `N` coefficients, `2(N-1)` multiply-adds, plus two
 ///   compares for the range.
+///
+/// ```
+/// use bushing::{Backbone, ParamError, Polynomial};
+///
+/// // F = 150 x + 4 x³ on [-6, 6] mm, in N.
+/// let p = Polynomial::<f32, 4>::new(&[0.0, 150.0, 0.0, 4.0], (-6.0, 6.0))?;
+/// let (force, tangent) = p.eval(1.0);
+/// assert_eq!((force, tangent), (154.0, 162.0));
+/// // A stiffness that turns negative on the range is refused.
+/// let soft = Polynomial::<f32, 4>::new(&[0.0, 150.0, 0.0, -4.0], (-6.0, 6.0));
+/// assert!(matches!(soft, Err(ParamError::TangentNotPositive { .. })));
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Polynomial<T, const N: usize> {
     coeffs: [T; N],
@@ -295,6 +308,20 @@ impl<T: Real> Piece<T> {
 ///   with no data-dependent loop test; spare capacity repeats the last
 ///   piece) and 6 multiply-adds: 20 guest instructions more than a cubic
 ///   polynomial on a Cortex-M4F for N = 8 (`scripts/accuracy-cost.sh`).
+///
+/// ```
+/// use bushing::{Backbone, MonotoneSpline, ParamError};
+///
+/// // Measured static points, mm and N.
+/// let s = MonotoneSpline::<f32, 8>::new(&[-2.0, 0.0, 1.0, 2.0], &[-400.0, 0.0, 160.0, 400.0])?;
+/// let (force, tangent) = s.eval(1.0);
+/// assert_eq!(force, 160.0);
+/// assert!(tangent > 0.0);
+/// // Forces must increase with x.
+/// let bad = MonotoneSpline::<f32, 8>::new(&[0.0, 1.0, 2.0], &[0.0, 10.0, 5.0]);
+/// assert!(matches!(bad, Err(ParamError::NotIncreasing { .. })));
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MonotoneSpline<T, const N: usize> {
     /// Piece `i` covers `[x_i, x_{i+1})`; piece `n-1` is the linear

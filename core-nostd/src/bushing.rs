@@ -12,21 +12,21 @@
 
 use crate::backbone::Backbone;
 use crate::error::{Faults, Param, ParamError};
-use crate::real::Real;
+use crate::real::{Exponentials, Real};
 
 /// What every effect sees in a step: the new displacement and the backbone
 /// evaluated there, with the increments since the last accepted step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Drive<T> {
-    /// Displacement x_n.
+    /// Displacement x_n, mm.
     pub x: T,
-    /// Increment x_n - x_{n-1}.
+    /// Increment x_n - x_{n-1}, mm.
     pub dx: T,
-    /// High-frequency backbone force F^∞(x_n).
+    /// High-frequency backbone force F^∞(x_n), N.
     pub f_inf: T,
-    /// Increment F^∞(x_n) - F^∞(x_{n-1}).
+    /// Increment F^∞(x_n) - F^∞(x_{n-1}), N.
     pub df_inf: T,
-    /// Backbone tangent K^∞(x_n) > 0.
+    /// Backbone tangent K^∞(x_n) > 0, N/mm.
     pub k_inf: T,
 }
 
@@ -34,10 +34,10 @@ pub struct Drive<T> {
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct EffectOutput<T> {
-    /// Force carried by the effect's branches at the end of the step.
+    /// Force carried by the effect's branches at the end of the step, N.
     pub force: T,
     /// Algorithmic tangent dF_n/dx_n of that force, the state at the start
-    /// of the step held fixed.
+    /// of the step held fixed, N/mm.
     pub tangent: T,
     /// Energy dissipated by the effect during the step: the work done on
     /// its branches over the step less the change of the energy they
@@ -117,6 +117,20 @@ pub trait Effect<T: Real> {
         t.force.abs() + t.tangent.abs()
     }
 
+    /// Re-tunes the effect to the temperature shift factor `a_t`
+    /// (absolute, as [`MaxwellBank::retune`](crate::MaxwellBank::retune)
+    /// takes it), in the working type with the exponentials `X`. The
+    /// Maxwell bank re-tunes its cells; an effect that does not depend on
+    /// temperature keeps its coefficients (the default); a tuple or an
+    /// `Option` re-tunes its members. The state carries over, since it
+    /// holds branch forces and not coefficients. On error the effect may
+    /// be partly re-tuned: [`Bushing::retune`] works on a copy.
+    #[inline]
+    fn retune<X: Exponentials<T>>(&mut self, a_t: T) -> Result<(), ParamError> {
+        let _ = a_t;
+        Ok(())
+    }
+
     /// Advances the state by one step if `accept` takes the report, and
     /// otherwise leaves the state exactly as it was and returns `None`.
     /// The default keeps a copy of the state and puts it back if the step
@@ -177,6 +191,9 @@ impl<T: Real, E: Effect<T>> Effect<T> for Option<E> {
     }
     fn check_dt(&self, dt: Option<f64>) -> Result<Option<f64>, ParamError> {
         self.as_ref().map_or(Ok(dt), |e| e.check_dt(dt))
+    }
+    fn retune<X: Exponentials<T>>(&mut self, a_t: T) -> Result<(), ParamError> {
+        self.as_mut().map_or(Ok(()), |e| e.retune::<X>(a_t))
     }
     fn rest(&self, x0: T) -> Self::State {
         self.as_ref().map(|e| e.rest(x0))
@@ -256,6 +273,10 @@ macro_rules! tuple_effect {
                 $( dt = self.$idx.check_dt(dt)?; )+
                 Ok(dt)
             }
+            fn retune<X: Exponentials<T>>(&mut self, a_t: T) -> Result<(), ParamError> {
+                $( self.$idx.retune::<X>(a_t)?; )+
+                Ok(())
+            }
             fn rest(&self, x0: T) -> Self::State {
                 ($(self.$idx.rest(x0),)+)
             }
@@ -304,6 +325,23 @@ tuple_effect!(A 0 ra, B 1 rb, C 2 rc, D 3 rd);
 tuple_effect!(A 0 ra, B 1 rb, C 2 rc, D 3 rd, E 4 re);
 tuple_effect!(A 0 ra, B 1 rb, C 2 rc, D 3 rd, E 4 re, F 5 rf);
 
+/// The state of a bushing in `T` with effects `E`, to name in a `static`
+/// or a struct field:
+///
+/// ```
+/// use bushing::{Bushing, IwanBank, MaxwellBank, Polynomial, StateOf};
+///
+/// type Effects = (MaxwellBank<f32, 4>, IwanBank<f32, 3>);
+/// struct Controller {
+///     bushing: Bushing<f32, Polynomial<f32, 4>, Effects>,
+///     state: StateOf<f32, Effects>,
+/// }
+/// ```
+pub type StateOf<T, E> = BushingState<T, <E as Effect<T>>::State>;
+
+/// The output of one step of a bushing in `T` with effects `E`.
+pub type OutputOf<T, E> = Output<T, <E as Effect<T>>::Report>;
+
 /// State of a [`Bushing`]: the last accepted input, backbone force and
 /// output, the effects' states, and the fault flags.
 #[derive(Debug, Clone, PartialEq)]
@@ -318,15 +356,15 @@ pub struct BushingState<T, S> {
 }
 
 impl<T: Real, S> BushingState<T, S> {
-    /// Last accepted displacement.
+    /// Last accepted displacement, mm.
     pub fn x(&self) -> T {
         self.x
     }
-    /// Force after the last accepted step.
+    /// Force after the last accepted step, N.
     pub fn force(&self) -> T {
         self.force
     }
-    /// Algorithmic tangent dF/dx of the last accepted step.
+    /// Algorithmic tangent dF/dx of the last accepted step, N/mm.
     pub fn tangent(&self) -> T {
         self.tangent
     }
@@ -353,13 +391,13 @@ impl<T: Real, S> BushingState<T, S> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Output<T, R> {
-    /// Total force F_n.
+    /// Total force F_n, N.
     pub force: T,
-    /// Algorithmic tangent dF_n/dx_n.
+    /// Algorithmic tangent dF_n/dx_n, N/mm.
     pub tangent: T,
-    /// Energy dissipated in the step, all branches.
+    /// Energy dissipated in the step, all branches, mJ (N·mm).
     pub dissipated: T,
-    /// Force of the long-term elastic branch g^0 F^∞(x_n).
+    /// Force of the long-term elastic branch g^0 F^∞(x_n), N.
     pub elastic: T,
     /// Per-effect outputs; `None` when the step was refused.
     pub effects: Option<R>,
@@ -376,6 +414,35 @@ pub struct Output<T, R> {
 /// in the state ([`Faults::NON_FINITE_INPUT`], [`Faults::OUT_OF_RANGE`] or
 /// [`Faults::FORCE_OUT_OF_RANGE`]). Every accepted step's force and tangent
 /// are finite and within the guard.
+///
+/// ```
+/// use bushing::{
+///     Bushing, IwanBank, IwanCellSpec, MaxwellBank, MaxwellForm, MaxwellSpec, ParamError,
+///     Polynomial,
+/// };
+///
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bank = MaxwellBank::<f32, 1>::new(MaxwellForm::RateExactRamp, &[MaxwellSpec::hz(5.0, 0.3)], 1e-3)?;
+/// let bushing = Bushing::new(backbone, (bank,))?;
+/// let mut state = bushing.state_at(0.0);
+/// let before = state.clone();
+/// // `trial` is `step` without touching the state.
+/// let (tried, _) = bushing.trial(&state, 0.5);
+/// assert_eq!(state, before);
+/// let out = bushing.step(&mut state, 0.5);
+/// assert_eq!(tried, out);
+/// assert_eq!(out.elastic, 35.0); // g^0 F^∞ = 0.7 · 50 N
+/// // A displacement beyond the guard is refused and flagged.
+/// let refused = bushing.step(&mut state, f32::INFINITY);
+/// assert_eq!(refused.force, out.force);
+/// assert_eq!(state.faults().to_string(), "NON_FINITE_INPUT");
+/// // Fractions above one in all are refused when the bushing is joined.
+/// let maxwell = MaxwellBank::<f32, 1>::new(MaxwellForm::RateExactRamp, &[MaxwellSpec::hz(5.0, 0.6)], 1e-3)?;
+/// let iwan = IwanBank::<f32, 1>::new(&[IwanCellSpec::new(0.6, 5.0)])?;
+/// let r = Bushing::new(backbone, (maxwell, iwan));
+/// assert!(matches!(r, Err(ParamError::FractionsAboveOne { .. })));
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct Bushing<T, B, E> {
     backbone: B,
@@ -436,7 +503,55 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
         &self.effects
     }
 
-    /// A relaxed state at displacement `x0`: every dissipative branch at
+    /// Re-tunes the effects in place to the temperature shift factor
+    /// `a_t` (absolute: the factor at the new temperature against the
+    /// reference), in the working type with the exponentials `X`: the
+    /// call a firmware makes between two periods when its temperature
+    /// reading changes (see [`crate::temperature`] for a_T). Only the
+    /// Maxwell cells depend on temperature; each takes its corner
+    /// ω_i / a_T. A running state carries over, so the force is continuous
+    /// across the change. Refused, with the bushing left as it was, for an
+    /// `a_t` that is not finite or not positive, or a cell whose
+    /// coefficients would leave the working type.
+    ///
+    /// ```
+    /// use bushing::{Bushing, LibmExp, MaxwellBank, MaxwellForm, MaxwellSpec, Polynomial};
+    ///
+    /// let cells = [MaxwellSpec::hz(1.0, 0.2), MaxwellSpec::hz(10.0, 0.2)];
+    /// let bank = MaxwellBank::<f32, 2>::new(MaxwellForm::RateExactRamp, &cells, 1e-3)?;
+    /// let backbone = Polynomial::<f32, 2>::new(&[0.0, 150.0], (-5.0, 5.0))?;
+    /// let mut bushing = Bushing::new(backbone, (bank,))?;
+    /// let mut state = bushing.state_at(0.0);
+    /// let before = bushing.step(&mut state, 0.5).force;
+    /// // Warmer: the cells relax 4 times faster (a_T = 0.25).
+    /// bushing.retune::<LibmExp>(0.25)?;
+    /// let after = bushing.step(&mut state, 0.5).force;
+    /// // No jump: the branch forces carry over, and relax faster.
+    /// assert!(after < before && after > 0.9 * before);
+    /// assert!(bushing.retune::<LibmExp>(-1.0).is_err());
+    /// # Ok::<(), bushing::ParamError>(())
+    /// ```
+    pub fn retune<X: Exponentials<T>>(&mut self, a_t: T) -> Result<(), ParamError>
+    where
+        E: Clone,
+    {
+        let param = Param::scalar("a_t");
+        if !a_t.is_finite() {
+            return Err(ParamError::NotFinite { param });
+        }
+        if a_t <= T::ZERO {
+            return Err(ParamError::NotPositive {
+                param,
+                value: a_t.to_f64(),
+            });
+        }
+        let mut effects = self.effects.clone();
+        effects.retune::<X>(a_t)?;
+        self.effects = effects;
+        Ok(())
+    }
+
+    /// A relaxed state at displacement `x0` (mm): every dissipative branch at
     /// zero force, so starting away from zero creates no spurious step.
     /// A non-finite `x0` is replaced by 0 and flagged.
     pub fn state_at(&self, x0: T) -> BushingState<T, E::State> {
@@ -463,7 +578,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
         }
     }
 
-    /// Advances `state` to displacement `x` and returns the output.
+    /// Advances `state` to displacement `x` (mm) and returns the output.
     /// Always inlined: a control loop calls it once per period, and inlining
     /// lets the compiler drop the outputs the caller does not read (the
     /// dissipated energy, with its division).

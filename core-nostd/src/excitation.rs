@@ -34,6 +34,20 @@ pub enum Spacing {
 }
 
 /// A sine sweep from `f0` to `f1` Hz over `duration` s.
+///
+/// ```
+/// use bushing::ParamError;
+/// use bushing::excitation::{Spacing, Sweep};
+///
+/// // A log sweep from 5 to 40 Hz over 2 s.
+/// let sweep = Sweep::new(5.0, 40.0, 2.0, Spacing::Log)?;
+/// assert_eq!(sweep.frequency(0.0), 5.0);
+/// assert!((sweep.frequency(2.0) - 40.0).abs() < 1e-9);
+/// assert_eq!(sweep.unit(0.0), 0.0); // starts at rest, amplitude 1
+/// // A sweep needs a positive duration.
+/// assert!(Sweep::new(5.0, 40.0, 0.0, Spacing::Log).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sweep {
     f0: f64,

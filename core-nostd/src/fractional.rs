@@ -112,6 +112,21 @@ impl FractionalSpec {
 /// - Cost: N multiply-adds per step (two contiguous dot products over the
 ///   ring buffer), no division; the dissipated energy adds one division by
 ///   K^∞ (dropped when not read). Memory: N weights and N + 2 state words.
+///
+/// ```
+/// use bushing::{Bushing, FractionalSpec, Grunwald, ParamError, Polynomial};
+///
+/// // Corner 5 Hz, order 0.5, 20 % of the backbone; 64 taps at 1 kHz.
+/// let cell = Grunwald::<f32, 64>::new(FractionalSpec::hz(5.0, 0.5, 0.2), 1e-3)?;
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bushing = Bushing::new(backbone, (cell,))?;
+/// let mut state = bushing.state_at(0.0);
+/// let out = bushing.step(&mut state, 1.0);
+/// assert!(out.force > 80.0 && out.force <= 100.0);
+/// // The order must be in (0, 1).
+/// assert!(Grunwald::<f32, 64>::new(FractionalSpec::hz(5.0, 1.5, 0.2), 1e-3).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct Grunwald<T, const N: usize> {
     /// Weights in buffer order: `rev[k] = A_{N-k+1}` (tap j = N - k).

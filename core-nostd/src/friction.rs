@@ -66,6 +66,20 @@ impl<T: Real> CellState<T> {
 ///   backbone (k_d = g K, F_f = g K x_f); it does not obey Masing (the slope
 ///   after a reversal from saturation is 2^α k_d).
 /// - **Cost**: one `expm1` (α = 1) or two `powf` per step.
+///
+/// ```
+/// use bushing::{Bushing, Dahl, ParamError, Polynomial};
+///
+/// // Initial stiffness 60 N/mm, friction force 8 N, exponent 1.
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bushing = Bushing::new(backbone, (Dahl::new(60.0, 8.0, 1.0)?,))?;
+/// let mut state = bushing.state_at(0.0);
+/// let out = bushing.step(&mut state, 2.0);
+/// // Far along one way the cell nears its friction force.
+/// assert!(out.force > 207.0 && out.force <= 208.0);
+/// assert!(Dahl::<f32>::new(60.0, -8.0, 1.0).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Dahl<T> {
     k_d: T,
@@ -206,6 +220,21 @@ impl Exponent {
 ///   instead); 2.6 iterations a step on average for n = 1.5 and 3, 1.95
 ///   for n = 8, under a sine in f64 (the test
 ///   `bouc_wen_takes_newton_steps_not_bisections`).
+///
+/// ```
+/// use bushing::{BoucWen, Bushing, ParamError, Polynomial};
+///
+/// // α = 40 N/mm, A = 1, β = 0.75, γ = 0.25, n = 1.
+/// let cell = BoucWen::new(40.0, 1.0, 0.75, 0.25, 1.0)?;
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bushing = Bushing::new(backbone, (cell,))?;
+/// let mut state = bushing.state_at(0.0);
+/// let out = bushing.step(&mut state, 0.5);
+/// assert!(out.force > 50.0 && out.tangent > 0.0);
+/// // β must exceed |γ| for the loop to stay bounded.
+/// assert!(BoucWen::<f32>::new(40.0, 1.0, 0.25, 0.75, 1.0).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BoucWen<T> {
     alpha: T,
@@ -485,6 +514,19 @@ impl<T: Real> BoucWen<T> {
 /// - **Cost**: two divisions per step (by denominators >= max(x_2 (1 -
 ///   |F_T| / F_fmax), 2^-24 x_2) > 0: the floor keeps a branch that starts
 ///   saturated flat instead of 0/0), a few multiply-adds.
+///
+/// ```
+/// use bushing::{Berg, Bushing, ParamError, Polynomial};
+///
+/// // Largest friction force 8 N, reached half way after x2 = 0.1 mm.
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bushing = Bushing::new(backbone, (Berg::new(8.0, 0.1)?,))?;
+/// let mut state = bushing.state_at(0.0);
+/// let out = bushing.step(&mut state, 0.1);
+/// assert!((out.force - 14.0).abs() < 0.01);
+/// assert!(Berg::<f32>::new(8.0, 0.0).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Berg<T> {
     f_max: T,

@@ -262,6 +262,24 @@ pub fn step_clamp<T: Real>(
 
 /// A bank of `N` Jenkins cells in the force-saturation (clamp) form, eqs 1.32
 /// and 1.35 (see the module docs for equations, limits and cost).
+///
+/// ```
+/// use bushing::{Bushing, IwanBank, IwanCellSpec, ParamError, Polynomial};
+///
+/// // Two Jenkins cells taking 10 % each, slipping at 1 N and 3 N.
+/// let cells = [IwanCellSpec::new(0.1, 1.0), IwanCellSpec::new(0.1, 3.0)];
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bushing = Bushing::new(backbone, (IwanBank::<f32, 2>::new(&cells)?,))?;
+/// let mut state = bushing.state_at(0.0);
+/// let out = bushing.step(&mut state, 1.0);
+/// // Both cells slip at 1 mm (10 N of stick each): 80 N elastic + 1 + 3.
+/// assert_eq!(out.force, 84.0);
+/// assert!(out.dissipated > 0.0);
+/// // A slip force must be positive.
+/// let r = IwanBank::<f32, 1>::new(&[IwanCellSpec::new(0.1, -1.0)]);
+/// assert!(matches!(r, Err(ParamError::NotPositive { .. })));
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct IwanBank<T, const N: usize> {
     cells: [ClampCell<T>; N],
@@ -362,6 +380,21 @@ pub fn step_sliders<T: Real>(
 
 /// A bank of `N` Jenkins cells in the slider (displacement) form, eqs
 /// 1.30-1.31 (see the module docs).
+///
+/// ```
+/// use bushing::{Bushing, IwanCellSpec, IwanSliders, ParamError, Polynomial};
+///
+/// // The slider form: each cell's stiffness g k_ref, here on 100 N/mm.
+/// let cells = [IwanCellSpec::new(0.1, 1.0), IwanCellSpec::new(0.1, 3.0)];
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bushing = Bushing::new(backbone, (IwanSliders::<f32, 2>::new(&cells, 100.0)?,))?;
+/// let mut state = bushing.state_at(0.0);
+/// let out = bushing.step(&mut state, 1.0);
+/// assert_eq!(out.force, 84.0);
+/// // The reference stiffness must be positive.
+/// assert!(IwanSliders::<f32, 2>::new(&cells, 0.0).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct IwanSliders<T, const N: usize> {
     cells: [SliderCell<T>; N],

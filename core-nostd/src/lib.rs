@@ -48,6 +48,27 @@
 //! - The energy dissipated in a step is finite and never negative, except
 //!   for the Grünwald cell ([`EffectOutput::dissipated`]).
 //!
+//! ## Units and conventions
+//!
+//! - **Displacement** in mm, **force** in N, so a stiffness or tangent is
+//!   in N/mm and an energy in N·mm = **mJ**. **Time** in s: every step
+//!   size `dt` is in seconds. Nothing in the crate converts units; a
+//!   consistent other set (m, N, J) works the same way if every parameter
+//!   uses it.
+//! - **Frequencies**: a spec built with `hz` takes Hz
+//!   ([`MaxwellSpec::hz`], [`XfSpec::hz`]); the fields `omega` are angular
+//!   frequencies in rad/s (ω = 2π f). The trackers report both: a mode's
+//!   `frequency` in Hz and its `omega` in rad/s.
+//! - **Signs**: the force has the sign of the displacement on the
+//!   backbone (F^∞(x) increases with x). It is the force that holds the
+//!   bushing at x, which a load cell in series reads. The 6-DOF bushing
+//!   gives the load on each node ([`six_dof`]).
+//! - **Fractions** g are of the high-frequency backbone F^∞: the long-term
+//!   branch carries g^0 = 1 - Σ g^i.
+//! - **Dissipated energy** is per step (sum it for a cycle's loop area);
+//!   the **tangent** is the algorithmic dF_n/dx_n with the state at the
+//!   start of the step held fixed.
+//!
 //! ```
 //! use bushing::{Bushing, MaxwellBank, MaxwellForm, MaxwellSpec, Polynomial};
 //!
@@ -76,6 +97,11 @@
 #[cfg(test)]
 extern crate alloc;
 
+/// The crate README's example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeExample;
+
 pub mod accumulator;
 pub mod backbone;
 pub mod bushing;
@@ -103,7 +129,7 @@ pub mod xf;
 pub use self::fixed::{Q16, Q32};
 pub use accumulator::{Accumulator, Compensated, Multiplied, Plain};
 pub use backbone::{Backbone, MonotoneSpline, Polynomial};
-pub use bushing::{Bushing, BushingState, Drive, Effect, EffectOutput, Output};
+pub use bushing::{Bushing, BushingState, Drive, Effect, EffectOutput, Output, OutputOf, StateOf};
 pub use error::{Faults, Param, ParamError};
 pub use fractional::{FractionalSpec, Grunwald, GrunwaldState};
 pub use friction::{Berg, BoucWen, Dahl};

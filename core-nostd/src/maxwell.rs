@@ -435,6 +435,30 @@ fn advance_rate<T: Real, A: Accumulator<T>, const ENERGY: bool>(
 ///
 /// `A` selects the state storage: [`Plain`] (default) or
 /// [`Compensated`](crate::Compensated) for slow cells in `f32`.
+///
+/// ```
+/// use bushing::{Bushing, MaxwellBank, MaxwellForm, MaxwellSpec, ParamError, Polynomial};
+///
+/// // Corners 1 and 10 Hz, each taking 20 % of the backbone, at 1 kHz.
+/// let cells = [MaxwellSpec::hz(1.0, 0.2), MaxwellSpec::hz(10.0, 0.2)];
+/// let bank = MaxwellBank::<f32, 2>::new(MaxwellForm::RateExactRamp, &cells, 1e-3)?;
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bushing = Bushing::new(backbone, (bank,))?;
+/// let mut state = bushing.state_at(0.0);
+/// // A fast ramp to 1 mm: the cells carry their share at first ...
+/// let mut out = bushing.step(&mut state, 1.0);
+/// assert!((out.force - 100.0).abs() < 1.0);
+/// // ... and relax while the displacement is held, to g^0 = 60 %.
+/// for _ in 0..5000 {
+///     out = bushing.step(&mut state, 1.0);
+/// }
+/// assert!((out.force - 60.0).abs() < 0.1 && out.dissipated >= 0.0);
+/// // An explicit form is refused where its pole leaves (0, 1).
+/// let fast = [MaxwellSpec::hz(500.0, 0.2)];
+/// let r = MaxwellBank::<f32, 1>::new(MaxwellForm::LoadExplicit, &fast, 1e-3);
+/// assert!(matches!(r, Err(ParamError::ExplicitUnstable { cell: 0, .. })));
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct MaxwellBank<T, const N: usize, A = Plain<T>> {
     form: MaxwellForm,
@@ -604,6 +628,10 @@ impl<T: Real, const N: usize, A: Accumulator<T>> Effect<T> for MaxwellBank<T, N,
     }
     fn rest(&self, _: T) -> [A; N] {
         [A::default(); N]
+    }
+    /// [`MaxwellBank::retune`].
+    fn retune<X: Exponentials<T>>(&mut self, a_t: T) -> Result<(), ParamError> {
+        MaxwellBank::retune::<X>(self, a_t)
     }
     #[inline(always)]
     fn step(&self, state: &mut [A; N], drive: &Drive<T>) -> EffectOutput<T> {

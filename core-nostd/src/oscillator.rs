@@ -80,6 +80,25 @@ use crate::real::Real;
 /// - Cost: one bushing trial per iteration, plus one to seed it; at
 ///   `K_0 h² < 1e-3` the iteration stops after two or three. The guards
 ///   cost three comparisons per step (on `f`, `a` and `v`), no division.
+///
+/// ```
+/// use bushing::{Bushing, Oscillator, ParamError, Polynomial};
+///
+/// // A unit-mass mode on a linear 100 N/mm spring (no effect), at 1 kHz.
+/// let spring = Bushing::new(Polynomial::<f64, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?, ())?;
+/// let osc = Oscillator::new(spring, 1e-3)?;
+/// let mut state = osc.state_at(1.0, 0.0, 0.0);
+/// // Free vibration: the trapezoidal rule keeps the amplitude.
+/// let mut peak: f64 = 0.0;
+/// for _ in 0..2000 {
+///     let s = osc.step(&mut state, 0.0);
+///     assert!(s.converged);
+///     peak = peak.max(s.p.abs());
+/// }
+/// assert!((peak - 1.0).abs() < 1e-3);
+/// assert!(Oscillator::new(Bushing::new(Polynomial::<f64, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?, ())?, 0.0).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct Oscillator<T, B, E> {
     restoring: Bushing<T, B, E>,

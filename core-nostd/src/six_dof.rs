@@ -197,7 +197,7 @@ impl<T: Real> Quat<T> {
     }
 
     /// R as a matrix: the linear map of [`Quat::rotate`],
-    /// (1 - 2|v|²) I + 2 v vᵀ + 2 w [v]×, formed with 24 operations, so
+    /// (1 - 2|v|²) I + 2 v vᵀ + 2 w \[v\]×, formed with 24 operations, so
     /// that each rotation by it takes 15 against the 30 of `rotate`.
     pub fn matrix(self) -> Mat3<T> {
         let ([x, y, z], w) = (self.v, self.w);
@@ -360,6 +360,26 @@ fn finite_poses<T: Real>(node1: &Pose<T>, node2: &Pose<T>) -> bool {
 
 /// A 6-DOF bushing: six 1D laws, two attachment points and a
 /// connectivity (see the module docs).
+///
+/// ```
+/// use bushing::six_dof::{Connectivity, Pose, Quat, SixDof};
+/// use bushing::{Bushing, ParamError, Polynomial};
+///
+/// // Six linear axes: 100 N/mm in translation, 1e4 N·mm/rad in rotation.
+/// let axis = |k: f64| Bushing::new(Polynomial::<f64, 2>::new(&[0.0, k], (-1e3, 1e3))?, ());
+/// let axes = [axis(100.0)?, axis(100.0)?, axis(100.0)?, axis(1e4)?, axis(1e4)?, axis(1e4)?];
+/// let mount = SixDof::new(axes, [[0.0; 3]; 2], Connectivity::Invariant)?;
+/// let at = |x: f64| Pose { position: [x, 0.0, 0.0], orientation: Quat::identity() };
+/// let mut state = mount.state_at(&at(0.0), &at(0.0));
+/// // Node 2 moved 1 mm along x: the bushing pulls the nodes together.
+/// let out = mount.step(&mut state, &at(0.0), &at(1.0));
+/// assert!((out.loads.force[0][0] - 100.0).abs() < 1e-9);
+/// assert_eq!(out.loads.force[1][0], -out.loads.force[0][0]);
+/// // Offsets must be finite.
+/// let axes = [axis(100.0)?, axis(100.0)?, axis(100.0)?, axis(1e4)?, axis(1e4)?, axis(1e4)?];
+/// assert!(SixDof::new(axes, [[f64::NAN, 0.0, 0.0], [0.0; 3]], Connectivity::Invariant).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct SixDof<T, B, E> {
     axes: [Bushing<T, B, E>; 6],

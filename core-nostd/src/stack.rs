@@ -152,6 +152,24 @@ struct KfPiece<T> {
 /// through up to `M` points (d_i, K_i), constant K_0 below d_0 and constant
 /// beyond the last point (give a last point with K = 0 for a force that
 /// saturates).
+///
+/// ```
+/// use bushing::stack::{FirstLoading, KfTable, TurningPoints};
+/// use bushing::{Bushing, ParamError, Polynomial};
+///
+/// // K_f(d) measured at 0, 0.5 and 2 mm from a turning point, N/mm.
+/// let kf = KfTable::<f32, 3>::new(&[0.0, 0.5, 2.0], &[40.0, 20.0, 5.0])?;
+/// let law = TurningPoints::<_, 16>::new(kf, FirstLoading::Masing);
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bushing = Bushing::new(backbone, (law,))?;
+/// let mut state = bushing.state_at(0.0);
+/// let out = bushing.step(&mut state, 1.0);
+/// assert!(out.force > 100.0 && out.dissipated > 0.0);
+/// // K_f must not increase with the distance.
+/// let r = KfTable::<f32, 3>::new(&[0.0, 0.5, 2.0], &[40.0, 50.0, 5.0]);
+/// assert!(matches!(r, Err(ParamError::Increasing { .. })));
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KfTable<T, const M: usize> {
     pieces: [KfPiece<T>; M],
@@ -346,6 +364,23 @@ impl<T: Real, const M: usize> StackState<T, M> {
 
 /// The hysteretic relaxation model with a turning-point stack of capacity
 /// `M` (see the module docs).
+///
+/// ```
+/// use bushing::stack::{FirstLoading, Sts, TurningPoints};
+/// use bushing::{Bushing, ParamError, Polynomial};
+///
+/// // The continuous STS law: C = 100 N²/mm, K_1 = 40 N/mm, 16 turning points.
+/// let sts = TurningPoints::<_, 16>::new(Sts::new(100.0, 40.0)?, FirstLoading::Masing);
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bushing = Bushing::new(backbone, (sts,))?;
+/// let mut state = bushing.state_at(0.0);
+/// let up = bushing.step(&mut state, 1.0);
+/// let back = bushing.step(&mut state, 0.0);
+/// // A loop: the hysteretic force lags on the way back.
+/// assert!(up.force > 100.0 && back.force < 0.0);
+/// assert!(Sts::<f32>::new(-1.0, 40.0).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TurningPoints<R, const M: usize> {
     law: R,

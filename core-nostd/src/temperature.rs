@@ -28,6 +28,23 @@ use crate::error::{Param, ParamError, finite, positive};
 use crate::real::{Exponentials, LibmExp, Real};
 
 /// A shift-factor law a_T (see the module docs for the direction).
+///
+/// ```
+/// use bushing::temperature::ShiftFactor;
+/// use bushing::{LibmExp, ParamError};
+///
+/// // WLF with the universal constants, referred to 20 °C.
+/// let law = ShiftFactor::wlf(8.86, 101.6, 293.15)?;
+/// assert_eq!(law.at(293.15)?, 1.0);
+/// let warm = law.at(313.15)?; // 40 °C: faster relaxation
+/// assert!(warm < 1.0);
+/// // On line, in f32, with one exponential.
+/// let a_t = law.at_in::<f32, LibmExp>(313.15)?;
+/// assert!((f64::from(a_t) - warm).abs() < 1e-5 * warm);
+/// // C_2 must be positive.
+/// assert!(ShiftFactor::wlf(8.86, 0.0, 293.15).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ShiftFactor {
     /// Williams-Landel-Ferry.

@@ -19,6 +19,21 @@ use crate::error::{Param, ParamError, positive};
 use crate::real::Real;
 
 /// A dashpot of coefficient c (force per velocity), at time step Δt.
+///
+/// ```
+/// use bushing::viscous::Dashpot;
+/// use bushing::{Bushing, ParamError, Polynomial};
+///
+/// // c = 2 N·s/mm at 1 kHz.
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bushing = Bushing::new(backbone, (Dashpot::new(2.0, 1e-3)?,))?;
+/// let mut state = bushing.state_at(0.0);
+/// // 0.01 mm in 1 ms: 10 mm/s, so 20 N of damping over 1 N of spring.
+/// let out = bushing.step(&mut state, 0.01);
+/// assert!((out.force - 21.0).abs() < 1e-3);
+/// assert!(Dashpot::<f32>::new(-2.0, 1e-3).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Dashpot<T> {
     /// c/Δt.

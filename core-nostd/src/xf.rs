@@ -208,6 +208,23 @@ pub fn step_xf<T: Real>(
 
 /// A bank of `N` x_f cells in one form (see the module docs for equations,
 /// limits and cost).
+///
+/// ```
+/// use bushing::{Bushing, ParamError, Polynomial, XfBank, XfForm, XfSpec};
+///
+/// // One x_f cell: 1 Hz viscous relaxation, 20 %, x_f = 0.5 mm, at 1 kHz.
+/// let cells = [XfSpec::hz(1.0, 0.2, 0.5)];
+/// let bank = XfBank::<f32, 1>::new(XfForm::ExactRamp, &cells, 1e-3)?;
+/// let backbone = Polynomial::<f32, 2>::new(&[0.0, 100.0], (-5.0, 5.0))?;
+/// let bushing = Bushing::new(backbone, (bank,))?;
+/// let mut state = bushing.state_at(0.0);
+/// let out = bushing.step(&mut state, 0.2);
+/// assert!(out.force > 16.0 && out.force < 20.0 && out.dissipated >= 0.0);
+/// // x_f must be positive.
+/// let r = XfBank::<f32, 1>::new(XfForm::ExactRamp, &[XfSpec::hz(1.0, 0.2, 0.0)], 1e-3);
+/// assert!(r.is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct XfBank<T, const N: usize> {
     form: XfForm,

@@ -193,11 +193,7 @@ impl<T: Sample> Rig<T> {
     /// The running state carries over. On error the controller is left as
     /// it was.
     pub fn retune<E: Exponentials<T>>(&mut self, a_t: T) -> Result<(), ParamError> {
-        let (maxwell, iwan) = self.bushing.effects();
-        let mut maxwell = maxwell.clone();
-        maxwell.retune::<E>(a_t)?;
-        self.bushing = Bushing::new(*self.bushing.backbone(), (maxwell, iwan.clone()))?;
-        Ok(())
+        self.bushing.retune::<E>(a_t)
     }
 
     /// A relaxed state at the displacement of ADC code `code`.

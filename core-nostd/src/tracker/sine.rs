@@ -401,6 +401,29 @@ impl<T: Real> SineState<T> {
 ///
 /// States: `(a, b)`, the analytic signal at the last sample (seed 000 eq
 /// 1.1 without the mean), and their 2×2 covariance.
+///
+/// ```
+/// use bushing::ParamError;
+/// use bushing::tracker::{Channel, SineSpec, SineTracker};
+///
+/// // A 10 Hz sine of 2 mm sampled at 1 kHz, tracked in a 2 Hz band.
+/// let spec = SineSpec { frequency: 10.0, bandwidth: 2.0 };
+/// let tracker = SineTracker::<f32>::new(1e-3, &spec, Channel { noise: 0.01, amplitude: 2.0 })?;
+/// let mut state = tracker.start();
+/// for n in 0..2000 {
+///     let t = n as f64 * 1e-3;
+///     let x = 2.0 * (core::f64::consts::TAU * 10.0 * t).sin();
+///     tracker.step(&mut state, x as f32).map_err(|_| ParamError::TooFew {
+///         param: bushing::Param::scalar("sample"), min: 0, got: 0 })?;
+/// }
+/// assert!((state.amplitude() - 2.0).abs() < 0.01);
+/// // A non-finite sample is refused, the estimate carried on.
+/// assert!(tracker.step(&mut state, f32::NAN).is_err());
+/// // The band must stay below half the frequency.
+/// let wide = SineSpec { frequency: 10.0, bandwidth: 6.0 };
+/// assert!(SineTracker::<f32>::new(1e-3, &wide, Channel { noise: 0.01, amplitude: 2.0 }).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct SineTracker<T> {
     kernel: Kernel<T>,
@@ -567,6 +590,33 @@ impl<T: Real> ModulusState<T> {
 /// b_X, a_F, b_F)` and a 2×2 covariance. Cost: 31 multiplies and one
 /// division per sample; [`ModulusTracker::modulus`] adds 9 and one
 /// division when called. Stability and tuning as [`SineTracker`].
+///
+/// ```
+/// use bushing::ParamError;
+/// use bushing::tracker::{Channel, ModulusSpec, ModulusTracker, SineSpec};
+///
+/// // A 5 Hz test, F = 100 x + 20 x' / ω: K' = 100 N/mm, K'' = 20 N/mm.
+/// let spec = ModulusSpec {
+///     sine: SineSpec { frequency: 5.0, bandwidth: 1.0 },
+///     displacement: Channel { noise: 1e-3, amplitude: 1.0 },
+///     force: Channel { noise: 0.1, amplitude: 100.0 },
+///     min_snr: 10.0,
+/// };
+/// let tracker = ModulusTracker::<f32>::new(1e-3, &spec)?;
+/// let mut state = tracker.start();
+/// assert!(tracker.modulus(&state).is_none()); // nothing to divide by yet
+/// let w = core::f64::consts::TAU * 5.0;
+/// for n in 0..3000 {
+///     let t = n as f64 * 1e-3;
+///     let (x, f) = ((w * t).sin(), 100.0 * (w * t).sin() + 20.0 * (w * t).cos());
+///     let _ = tracker.step(&mut state, x as f32, f as f32);
+/// }
+/// let k = tracker.modulus(&state).expect("settled");
+/// assert!((k.storage - 100.0).abs() < 0.5 && (k.loss - 20.0).abs() < 0.5);
+/// // min_snr must be positive.
+/// assert!(ModulusTracker::<f32>::new(1e-3, &ModulusSpec { min_snr: 0.0, ..spec }).is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModulusTracker<T> {
     kernel: Kernel<T>,

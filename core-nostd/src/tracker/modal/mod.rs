@@ -147,6 +147,45 @@ impl<T: Real, const N: usize> ModalState<T, N> {
 }
 
 /// The tracker's parameters (see the module docs).
+///
+/// ```
+/// use bushing::ParamError;
+/// use bushing::tracker::{Filter, Measured, ModalTracker, ModeInit, SensorSpec, Tuning};
+///
+/// // One mode on one displacement sensor (4 states), started 4 % off.
+/// let tracker = ModalTracker::<f32, 4>::new(
+///     1e-3,
+///     &[SensorSpec { measured: Measured::Displacement, noise: 1e-3 }],
+///     &[ModeInit { frequency: 11.5, damping: 0.0 }],
+///     &[(0.0, -1.0)],
+///     &Tuning { initial_frequency_error: 0.05, ..Tuning::default() },
+///     Filter::Ekf,
+/// )?;
+/// let mut state = tracker.start();
+/// // A free decay at 12 Hz and 2 % damping.
+/// let (f, zeta) = (12.0, 0.02);
+/// let w = core::f64::consts::TAU * f;
+/// for n in 0..2000 {
+///     let t = n as f64 * 1e-3;
+///     let x = (-zeta * w * t).exp() * (w * (1.0 - zeta * zeta).sqrt() * t).sin();
+///     tracker.step(&mut state, &[x as f32]);
+/// }
+/// let mode = tracker.mode(&state, 0);
+/// assert!((mode.frequency - 12.0).abs() < 0.05 && (mode.damping - 0.02).abs() < 0.005);
+/// // A non-finite sample is refused for its sensor only.
+/// assert!(tracker.step(&mut state, &[f32::NAN]).refused);
+/// // N must match the modes and sensors: one mode on two sensors is 6 states.
+/// let r = ModalTracker::<f32, 4>::new(
+///     1e-3,
+///     &[SensorSpec { measured: Measured::Displacement, noise: 1e-3 }; 2],
+///     &[ModeInit { frequency: 12.0, damping: 0.0 }],
+///     &[(0.0, -1.0), (0.0, -1.0)],
+///     &Tuning::default(),
+///     Filter::Ekf,
+/// );
+/// assert!(r.is_err());
+/// # Ok::<(), ParamError>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModalTracker<T, const N: usize> {
     modes: usize,
