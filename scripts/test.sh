@@ -8,6 +8,7 @@
 #      Cortex-M3 without FPU (thumbv7m-none-eabi), in floating and fixed
 #      point;
 #   3. the Cortex-M suite under QEMU: M4F debug and release, M3 release,
+#      M7 release (mps2-an500, the M4F target built for the Cortex-M7),
 #      and the named hard cases on both cores; QEMU's exit code is the
 #      verdict, a hang is killed by `timeout`;
 #   4. the accuracy-cost report in its quick mode: the kernel-cost firmware
@@ -18,9 +19,10 @@
 #      firmwares in QEMU against bushing-sim (their defmt logs decoded),
 #      and the panic-never link check; then the C API of scripts/c-api.sh
 #      (the header, a host C test, the C rig loop in QEMU);
-#   6. the core as a crate a firmware engineer picks up: its package
-#      files, `cargo publish --dry-run`, its docs with every feature and
-#      no rustdoc warning, its doctests;
+#   6. the core as a crate a firmware engineer picks up: the firmware
+#      template run in QEMU from a folder outside the workspace
+#      (scripts/template.sh), the package files, `cargo publish --dry-run`,
+#      the docs with every feature and no rustdoc warning, the doctests;
 #   7. every scene of scenes/ run with the README's command form;
 #   8. a scene's cost against its parts in host instructions (callgrind),
 #      printed, never asserted.
@@ -102,6 +104,14 @@ cargo test -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m --rel
 step "Cortex-M suite in QEMU: M3 (mps2-an385), soft float, release"
 cargo test -p bushing-tests --target thumbv7m-none-eabi --test cortex_m --release
 
+step "Cortex-M suite in QEMU: M7 (mps2-an500, double-precision FPU), release"
+# The M4F target built for the Cortex-M7 (f64 in hardware), in a build
+# folder of its own, run on QEMU's Cortex-M7 board.
+CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUSTFLAGS="-C target-cpu=cortex-m7" \
+CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUNNER="timeout -k 5 300 qemu-system-arm -machine mps2-an500 -cpu cortex-m7 -nographic -semihosting-config enable=on,target=native -icount shift=0,sleep=off -kernel" \
+    cargo test -p bushing-tests --target thumbv7em-none-eabihf --test cortex_m --release \
+    --target-dir "$target/m7"
+
 step "named hard cases in QEMU: M4F and M3, release (docs/hard-cases.md)"
 cargo test -p bushing-tests --target thumbv7em-none-eabihf --test hard_cases --release
 cargo test -p bushing-tests --target thumbv7m-none-eabi --test hard_cases --release
@@ -119,6 +129,9 @@ step "rig-loop firmware in QEMU against bushing-sim, panic-never link check"
 
 step "C API: header, host C test, the C rig loop in QEMU against the Rust one"
 ./scripts/c-api.sh
+
+step "the firmware template, copied outside the workspace, built and run in QEMU"
+./scripts/template.sh
 
 step "the core as a published crate: files, publish dry run, docs and doctests with every feature"
 cargo package --list -p bushing | tr '\n' ' ' | fold -w 100 -s

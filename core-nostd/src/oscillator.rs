@@ -157,18 +157,18 @@ impl<T: Real, S> OscillatorState<T, S> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct OscillatorStep<T> {
-    /// Modal displacement p_{n+1}.
+    /// Modal displacement p_{n+1}, mm.
     pub p: T,
-    /// Modal velocity v_{n+1}.
+    /// Modal velocity v_{n+1}, mm/s.
     pub v: T,
-    /// Modal acceleration a_{n+1}.
+    /// Modal acceleration a_{n+1}, mm/s².
     pub a: T,
-    /// Restoring force r(p_{n+1}).
+    /// Restoring force r(p_{n+1}), N.
     pub force: T,
-    /// Energy dissipated by the restoring force in the step.
+    /// Energy dissipated by the restoring force in the step, mJ.
     pub dissipated: T,
     /// Work of the external force in the step, trapezoidal:
-    /// `(f_n + f_{n+1})/2 (p_{n+1} - p_n)`.
+    /// `(f_n + f_{n+1})/2 (p_{n+1} - p_n)`, mJ.
     pub work: T,
     /// Chord iterations taken.
     pub iterations: u32,

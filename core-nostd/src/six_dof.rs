@@ -232,7 +232,7 @@ impl<T: Real> core::ops::Mul for Quat<T> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Pose<T> {
-    /// Position in the global frame.
+    /// Position in the global frame, mm.
     pub position: Vec3<T>,
     /// Orientation: node frame to global frame, a unit quaternion (the
     /// kinematics do not renormalise it).
@@ -253,9 +253,9 @@ pub enum Connectivity {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Loads<T> {
-    /// Force on node 1 and on node 2.
+    /// Force on node 1 and on node 2, N.
     pub force: [Vec3<T>; 2],
-    /// Moment on node 1 and on node 2, about each node's position.
+    /// Moment on node 1 and on node 2, about each node's position, N·mm.
     pub moment: [Vec3<T>; 2],
 }
 
@@ -265,15 +265,16 @@ pub struct Loads<T> {
 pub struct SixDofOutput<T> {
     /// Loads on the nodes.
     pub loads: Loads<T>,
-    /// The six local strains: d in the bushing frame, then θ.
+    /// The six local strains: d in the bushing frame (mm), then θ (rad).
     pub strain: [T; 6],
-    /// The six local loads: F̄, then M̄ (bushing frame).
+    /// The six local loads: F̄ (N), then M̄ (N·mm), in the bushing frame.
     pub local: [T; 6],
-    /// The six axes' algorithmic tangents dF̄_k/dx_k (bushing frame).
+    /// The six axes' algorithmic tangents dF̄_k/dx_k (bushing frame):
+    /// N/mm for the translations, N·mm/rad for the rotations.
     pub tangent: [T; 6],
     /// The bushing frame: node 1's (attached) or the mid frame.
     pub frame: Quat<T>,
-    /// Energy dissipated in the step, all axes.
+    /// Energy dissipated in the step, all axes, mJ.
     pub dissipated: T,
 }
 
