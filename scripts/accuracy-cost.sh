@@ -8,7 +8,8 @@
 #                                      target/accuracy-cost/quick/ (CI)
 #
 # 1. builds and runs the kernel-cost firmware under QEMU for the Cortex-M4F
-#    (thumbv7em-none-eabihf) and the Cortex-M3 (thumbv7m-none-eabi, software
+#    (thumbv7em-none-eabihf), the Cortex-M7 (the same target built for it,
+#    in QEMU's mps2-an500) and the Cortex-M3 (thumbv7m-none-eabi, software
 #    floating point), with the bushing-qemu-mix plugin recording the
 #    instructions each measurement executed; keeps each output, mix, ELF and
 #    disassembly (llvm-objdump of rustup's llvm-tools) in
@@ -83,6 +84,21 @@ for triple in thumbv7em-none-eabihf thumbv7m-none-eabi; do
     mixes+=("$triple=$mix")
     disassemblies+=("$triple=$work/kernel-cost-$triple.dis")
 done
+
+# The Cortex-M7: the M4F target built for it (f64 in hardware), in a build
+# folder of its own, on QEMU's mps2-an500. Instructions only: the cycle
+# model covers the Cortex-M4 and the Cortex-M3.
+echo "==> kernel-cost on the Cortex-M7 (thumbv7em-none-eabihf, target-cpu=cortex-m7; QEMU mps2-an500)"
+m7="$work/cortex-m7"
+mkdir -p "$m7"
+BUSHING_KERNEL_TARGET=m7 CARGO_TARGET_DIR="$m7/target" \
+CARGO_TARGET_THUMBV7EM_NONE_EABIHF_RUSTFLAGS="-C target-cpu=cortex-m7" \
+    cargo build -q --release -p bushing-boards --target thumbv7em-none-eabihf --bin kernel-cost
+cp "$m7/target/thumbv7em-none-eabihf/release/kernel-cost" "$m7/kernel-cost.elf"
+measure "$m7/kernel-cost.elf" "$work/kernel-cost-cortex-m7.txt" "$m7/mix.txt" \
+    -machine mps2-an500 -cpu cortex-m7
+grep -c '^kernel ' "$work/kernel-cost-cortex-m7.txt" | sed "s/^/    kernel lines: /"
+kernels+=("$work/kernel-cost-cortex-m7.txt")
 
 # The headline kernels again, in a binary of their own (feature
 # headline-only): the harness's spread between two builds.

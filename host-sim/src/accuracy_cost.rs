@@ -213,6 +213,9 @@ pub struct Row {
     pub m4f_call: Option<f64>,
     /// Cortex-M3 guest instructions per call.
     pub m3: Option<f64>,
+    /// Cortex-M7 guest instructions per call (the M4F target built for the
+    /// Cortex-M7: f64 in hardware).
+    pub m7: Option<f64>,
     /// Cortex-M4F estimated cycles per call, net of the call (from the
     /// executed-instruction mix, [`cycles`]).
     pub m4f_cycles: Option<f64>,
@@ -245,6 +248,7 @@ impl Row {
             m4f: None,
             m4f_call: None,
             m3: None,
+            m7: None,
             m4f_cycles: None,
             m3_cycles: None,
             m4f_input: None,
@@ -413,7 +417,7 @@ pub struct Report {
 }
 
 /// Columns of the CSV.
-pub const CSV_COLUMNS: [&str; 16] = [
+pub const CSV_COLUMNS: [&str; 17] = [
     "family",
     "name",
     "n",
@@ -424,6 +428,7 @@ pub const CSV_COLUMNS: [&str; 16] = [
     "host_instr",
     "m4f_instr",
     "m3_instr",
+    "m7_instr",
     "m4f_cycles",
     "m3_cycles",
     "worst_input",
@@ -517,6 +522,10 @@ fn join(
     row.host_instr = sum_all(keys.iter().map(|k| instr.get(k).copied()));
     let m4f: Vec<Option<KernelLine>> = keys.iter().map(|k| lines.get("m4f", k).cloned()).collect();
     let m3: Vec<Option<KernelLine>> = keys.iter().map(|k| lines.get("m3", k).cloned()).collect();
+    row.m7 = sum_all(
+        keys.iter()
+            .map(|k| lines.get("m7", k).map(KernelLine::instructions)),
+    );
     row.m4f = sum_all(m4f.iter().map(|l| l.as_ref().map(KernelLine::instructions)));
     row.m4f_call = sum_all(m4f.iter().map(|l| l.as_ref().map(|l| l.per_call)));
     row.m3 = sum_all(m3.iter().map(|l| l.as_ref().map(KernelLine::instructions)));

@@ -39,6 +39,11 @@ kernel target=m3 type=f32 family=maxwell name=rate-exact-ramp/plain n=8 per_call
 kernel target=m3 type=f32 family=tracker name=ekf/1-mode-1-acc n=4 per_call=21771.5 net=21771.5 state_bytes=100 params_bytes=216 fn=0x0000d070
 ";
 
+/// The M4F target built for the Cortex-M7: its lines say `target=m7`.
+const KERNELS_M7: &str = "\
+kernel target=m7 type=f32 family=maxwell name=rate-exact-ramp/plain n=8 per_call=70.0 net=61.0 state_bytes=32 params_bytes=448 fn=0x00001000
+";
+
 const PEERS: &str = "\
 kalman name=bushing-ekf crate=bushing filter=ekf cost=1388 unit=instructions freq_err_pct=0.004 damp_err_pts=0.002 amp_rms=0.01
 kalman name=peer-ekf crate=some-kalman@0.3.1 filter=ekf cost=5000 unit=instructions freq_err_pct=0.004 damp_err_pts=0.003 amp_rms=0.02
@@ -83,6 +88,7 @@ fn inputs() -> Inputs {
         kernels: vec![
             ("m4f.txt".into(), KERNELS_M4F.into()),
             ("m3.txt".into(), KERNELS_M3.into()),
+            ("m7.txt".into(), KERNELS_M7.into()),
         ],
         elfs: Vec::new(),
         peers: vec![("peers.txt".into(), PEERS.into())],
@@ -173,10 +179,19 @@ fn quick_report_has_every_part() {
             r[0] == "maxwell" && r[1] == "rate-exact-ramp/plain" && r[2] == "8" && r[3] == "f32"
         })
         .expect("the 8-cell exact-ramp row");
-    assert!(joined[4].parse::<f64>().is_ok_and(|e| e > 0.0 && e < 0.01));
-    assert_eq!(joined[8], "112");
-    assert_eq!(joined[9], "2490");
-    assert_eq!(joined[14], "32");
+    let col = |name: &str| {
+        let i = CSV_COLUMNS.iter().position(|c| *c == name);
+        joined[i.expect("a CSV column")].as_str()
+    };
+    assert!(
+        col("error")
+            .parse::<f64>()
+            .is_ok_and(|e| e > 0.0 && e < 0.01)
+    );
+    assert_eq!(col("m4f_instr"), "112");
+    assert_eq!(col("m3_instr"), "2490");
+    assert_eq!(col("m7_instr"), "61");
+    assert_eq!(col("state_bytes"), "32");
 
     // The plot.
     plot::well_formed(&report.svg).expect("well-formed SVG");

@@ -143,10 +143,13 @@ mod firmware {
         }
     }
 
-    const TARGET: &str = if cfg!(target_abi = "eabihf") {
-        "m4f"
-    } else {
-        "m3"
+    /// The core the lines name: `BUSHING_KERNEL_TARGET` at build time
+    /// (`m7` for the M4F target built for the Cortex-M7, which the target
+    /// triple does not tell apart), else the triple's.
+    const TARGET: &str = match option_env!("BUSHING_KERNEL_TARGET") {
+        Some(t) => t,
+        None if cfg!(target_abi = "eabihf") => "m4f",
+        None => "m3",
     };
 
     /// What one measurement printed.

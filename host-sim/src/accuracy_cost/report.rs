@@ -524,6 +524,7 @@ fn row_table(rows: &[&Row], with_family: bool) -> String {
         "error",
         "M4F instr",
         "M3 instr",
+        "M7 instr",
         "M4F cycles",
         "M3 cycles",
         "worst input",
@@ -547,6 +548,7 @@ fn row_table(rows: &[&Row], with_family: bool) -> String {
             pct(r.error),
             num(r.m4f, 1),
             num(r.m3, 1),
+            num(r.m7, 1),
             num(r.m4f_cycles, 1),
             num(r.m3_cycles, 1),
             r.m4f_input.clone().unwrap_or_else(|| "-".into()),
@@ -653,8 +655,9 @@ pub(super) fn markdown(
          Mode: {mode}. Inputs: {}.\n\n\
          - **Error**: a fraction, shown in %, against a reference that is not the code under test\n  \
            (closed forms, or the same model in f64 at a 64 times finer step); each family says which.\n\
-         - **M4F / M3 instr**: guest instructions per call on Cortex-M4F / Cortex-M3 (software\n  \
-           floating point) in QEMU with `-icount shift=0`, over 2000 calls (200 for re-tuning, 10\n  \
+         - **M4F / M3 / M7 instr**: guest instructions per call on Cortex-M4F / Cortex-M3 (software\n  \
+           floating point) / Cortex-M7 (the M4F target built with `-C target-cpu=cortex-m7`, double\n  \
+           precision in hardware, QEMU `mps2-an500`) in QEMU with `-icount shift=0`, over 2000 calls (200 for re-tuning, 10\n  \
            for the fit), net of the call (`net=`: the kernel less a stand-in of the same signature\n  \
            through the same harness, what the kernel costs inlined in a control loop; see\n  \
            \"Harness\"); exact counts from the instruction mix where one was given, else read from\n  \
@@ -858,6 +861,7 @@ pub(super) fn markdown(
             "type",
             "M4F instr",
             "M3 instr",
+            "M7 instr",
             "M4F cycles",
             "M3 cycles",
             "worst input",
@@ -866,10 +870,10 @@ pub(super) fn markdown(
             "params B",
             "lines",
         ]);
-        for (key, (a, b)) in &grouped {
+        for (key, (a, b, c)) in &grouped {
             let any = a.or(*b);
             // `file:line`, the file without its directories.
-            let origins: Vec<&str> = [a, b]
+            let origins: Vec<&str> = [a, b, c]
                 .iter()
                 .filter_map(|l| l.map(|l| l.origin.rsplit('/').next().unwrap_or(&l.origin)))
                 .collect();
@@ -880,6 +884,7 @@ pub(super) fn markdown(
                 key.number.clone(),
                 a.map_or_else(|| "-".into(), |l| sig(l.instructions())),
                 b.map_or_else(|| "-".into(), |l| sig(l.instructions())),
+                c.map_or_else(|| "-".into(), |l| sig(l.instructions())),
                 a.and_then(|l| l.cycles).map_or_else(|| "-".into(), sig),
                 b.and_then(|l| l.cycles).map_or_else(|| "-".into(), sig),
                 a.and_then(|l| l.input.clone())
@@ -971,9 +976,16 @@ pub(super) fn markdown(
     s
 }
 
-/// The other kernels by family, name, n and type: (M4F line, M3 line);
-/// a line of another target counts as the M4F one when there is none.
-type Grouped<'a> = BTreeMap<Key, (Option<&'a KernelLine>, Option<&'a KernelLine>)>;
+/// One kernel's lines: M4F, M3 and M7.
+type Targets<'a> = (
+    Option<&'a KernelLine>,
+    Option<&'a KernelLine>,
+    Option<&'a KernelLine>,
+);
+
+/// The other kernels by family, name, n and type; a line of another
+/// target counts as the M4F one when there is none.
+type Grouped<'a> = BTreeMap<Key, Targets<'a>>;
 
 fn group_other(other: &[KernelLine]) -> Grouped<'_> {
     let mut grouped: Grouped<'_> = BTreeMap::new();
@@ -983,6 +995,8 @@ fn group_other(other: &[KernelLine]) -> Grouped<'_> {
             .or_default();
         if l.target == "m3" {
             e.1 = Some(l);
+        } else if l.target == "m7" {
+            e.2 = Some(l);
         } else if e.0.is_none() {
             e.0 = Some(l);
         }
@@ -1013,6 +1027,7 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             r.host_instr.map_or_else(String::new, |v| format!("{v:.1}")),
             csv_num(r.m4f),
             csv_num(r.m3),
+            csv_num(r.m7),
             csv_num(r.m4f_cycles),
             csv_num(r.m3_cycles),
             r.m4f_input.clone().unwrap_or_default(),
@@ -1025,7 +1040,7 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
     // Other kernels: one line per family, name, n and type, M4F and M3
     // figures side by side.
     let grouped = group_other(other);
-    for (key, (a, b)) in grouped {
+    for (key, (a, b, c)) in grouped {
         let code = a.and_then(|l| {
             let f = l.function?;
             elfs.get(&l.target)?.function_size(f)
@@ -1042,6 +1057,7 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             String::new(),
             csv_num(a.map(KernelLine::instructions)),
             csv_num(b.map(KernelLine::instructions)),
+            csv_num(c.map(KernelLine::instructions)),
             csv_num(a.and_then(|l| l.cycles)),
             csv_num(b.and_then(|l| l.cycles)),
             a.and_then(|l| l.input.clone()).unwrap_or_default(),
