@@ -55,7 +55,8 @@ pub struct Polynomial<T, const N: usize> {
 }
 
 impl<T: Real, const N: usize> Polynomial<T, N> {
-    /// Builds `F(x) = coeffs[0] + coeffs[1] x + ...` valid on `range`.
+    /// Builds `F(x) = coeffs[0] + coeffs[1] x + ...` (c_k in N/mm^k, x in
+    /// mm) valid on `range` (mm).
     /// Fewer than `N` coefficients are padded with zeros.
     pub fn new(coeffs: &[f64], range: (f64, f64)) -> Result<Self, ParamError> {
         let param = Param::scalar("coefficients");
@@ -333,7 +334,8 @@ pub struct MonotoneSpline<T, const N: usize> {
 }
 
 impl<T: Real, const N: usize> MonotoneSpline<T, N> {
-    /// Builds the spline through `(xs[i], forces[i])`.
+    /// Builds the spline through `(xs[i], forces[i])`: displacements in mm,
+    /// forces in N.
     pub fn new(xs: &[f64], forces: &[f64]) -> Result<Self, ParamError> {
         let n = xs.len();
         if n < 2 {

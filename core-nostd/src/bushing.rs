@@ -11,7 +11,7 @@
 //! not in the type costs no instruction and no byte.
 
 use crate::backbone::Backbone;
-use crate::error::{Faults, Param, ParamError};
+use crate::error::{Faults, Param, ParamError, positive_in};
 use crate::real::{Exponentials, Real};
 
 /// What every effect sees in a step: the new displacement and the backbone
@@ -535,16 +535,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
     where
         E: Clone,
     {
-        let param = Param::scalar("a_t");
-        if !a_t.is_finite() {
-            return Err(ParamError::NotFinite { param });
-        }
-        if a_t <= T::ZERO {
-            return Err(ParamError::NotPositive {
-                param,
-                value: a_t.to_f64(),
-            });
-        }
+        positive_in(Param::scalar("a_t"), a_t)?;
         let mut effects = self.effects.clone();
         effects.retune::<X>(a_t)?;
         self.effects = effects;

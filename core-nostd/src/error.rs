@@ -314,6 +314,21 @@ pub(crate) fn in_range(
     }
 }
 
+/// Checks that a value in the working type (an on-line input such as a
+/// shift factor) is finite and strictly positive.
+pub(crate) fn positive_in<T: crate::Real>(param: Param, value: T) -> Result<T, ParamError> {
+    if !value.is_finite() {
+        return Err(ParamError::NotFinite { param });
+    }
+    if value <= T::ZERO {
+        return Err(ParamError::NotPositive {
+            param,
+            value: value.to_f64(),
+        });
+    }
+    Ok(value)
+}
+
 /// Checks that `value` is finite.
 pub(crate) fn finite(param: Param, value: f64) -> Result<f64, ParamError> {
     if value.is_finite() {

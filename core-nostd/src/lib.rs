@@ -26,7 +26,7 @@
 //! whose restoring force is any bushing (the Iwan oscillator of the joint
 //! thesis, "seed 004"), and [`tracker`] follows the frequency and damping
 //! of measured modes on line (the modal Kalman tracker of seed 004).
-//! With feature `serde`, [`specs`] reads the parameter specs from a
+//! With feature `serde`, the module `specs` reads the parameter specs from a
 //! configuration file through their checked constructors (no alloc).
 //!
 //! ## The contract

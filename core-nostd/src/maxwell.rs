@@ -67,7 +67,7 @@ use core::marker::PhantomData;
 
 use crate::accumulator::{Accumulator, Plain};
 use crate::bushing::{Drive, Effect, EffectOutput};
-use crate::error::{Param, ParamError, positive};
+use crate::error::{Param, ParamError, positive, positive_in};
 use crate::real::{Exponentials, LibmExp, Real};
 
 /// The discrete form of a Maxwell cell (see the module table).
@@ -560,16 +560,7 @@ impl<T: Real, const N: usize, A: Accumulator<T>> MaxwellBank<T, N, A> {
     /// ω_i dt that overflows, vanishes or makes an explicit form unstable)
     /// the bank is left as it was.
     pub fn retune<E: Exponentials<T>>(&mut self, a_t: T) -> Result<(), ParamError> {
-        let param = Param::scalar("a_t");
-        if !a_t.is_finite() {
-            return Err(ParamError::NotFinite { param });
-        }
-        if a_t <= T::ZERO {
-            return Err(ParamError::NotPositive {
-                param,
-                value: a_t.to_f64(),
-            });
-        }
+        positive_in(Param::scalar("a_t"), a_t)?;
         let mut cells = self.cells;
         let mut gain = T::ZERO;
         for (i, (cell, &h_ref)) in cells.iter_mut().zip(&self.h_ref).enumerate() {

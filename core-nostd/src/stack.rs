@@ -177,8 +177,8 @@ pub struct KfTable<T, const M: usize> {
 }
 
 impl<T: Real, const M: usize> KfTable<T, M> {
-    /// Builds the table: `d` increasing from >= 0, `k` >= 0 and
-    /// non-increasing. Every value the law stores must also fit the
+    /// Builds the table: distances `d` (mm) increasing from >= 0, and
+    /// stiffnesses `k` (N/mm) >= 0 and non-increasing. Every value the law stores must also fit the
     /// working type: `d_i`, `k_i`, the force H(d_i) gained up to each
     /// point and the slope between points at most [`Real::GUARD`] (2^60 in
     /// f32), else [`ParamError::OutOfRange`] names the point.

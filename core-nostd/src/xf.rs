@@ -83,7 +83,7 @@ pub struct XfSpec {
     pub omega: f64,
     /// Load fraction g_i.
     pub g: f64,
-    /// Hysteretic relaxation distance x_f^i (same unit as x).
+    /// Hysteretic relaxation distance x_f^i, mm (the unit of x).
     pub x_f: f64,
 }
 
