@@ -57,6 +57,27 @@ pub(crate) unsafe fn put<S: Storage>(p: *mut S, value: S::Value) -> Result<(), B
     Ok(())
 }
 
+/// The tagged slot at `p` once its tag says `init` stored a value: the
+/// null and tag checks of [`get`] and [`get_mut`].
+///
+/// # Safety
+///
+/// `p` is null or points to a readable `S` (its words written by C or by
+/// [`put`]).
+unsafe fn tagged<S: Storage>(p: *const S) -> Result<*const Tagged<S::Value>, BushingStatus> {
+    const { fits::<S>() };
+    if p.is_null() {
+        return Err(BushingStatus::NullPointer);
+    }
+    let slot = p.cast::<Tagged<S::Value>>();
+    // SAFETY: `p` is non-null and readable (the caller's contract) and
+    // aligned for the tag (`fits`); the tag is a `u64`, valid for any bits.
+    if unsafe { (*slot).tag } != S::TAG {
+        return Err(BushingStatus::NotInitialised);
+    }
+    Ok(slot)
+}
+
 /// The value in the words at `p`, if `init` stored one.
 ///
 /// # Safety
@@ -64,21 +85,10 @@ pub(crate) unsafe fn put<S: Storage>(p: *mut S, value: S::Value) -> Result<(), B
 /// `p` is null or points to a readable, initialised `S` (its words
 /// written by C or by [`put`]) that nothing writes during `'a`.
 pub(crate) unsafe fn get<'a, S: Storage>(p: *const S) -> Result<&'a S::Value, BushingStatus> {
-    const { fits::<S>() };
-    if p.is_null() {
-        return Err(BushingStatus::NullPointer);
-    }
-    let slot = p.cast::<Tagged<S::Value>>();
-    // SAFETY: `p` is non-null and readable for `'a` (the caller's
-    // contract), and aligned for the tag (`fits`); the tag is a `u64`,
-    // valid for any bits. Only when it is `S::TAG` did `put` store a
-    // valid value behind it, which is then read as a shared reference.
-    unsafe {
-        if (*slot).tag != S::TAG {
-            return Err(BushingStatus::NotInitialised);
-        }
-        Ok(&(*slot).value)
-    }
+    // SAFETY: the caller's contract is `tagged`'s. Only when the tag is
+    // `S::TAG` did `put` store a valid value behind it, which is then read
+    // as a shared reference that nothing writes during `'a`.
+    unsafe { tagged(p).map(|slot| &(*slot).value) }
 }
 
 /// The value in the words at `p`, mutably, if `init` stored one.
@@ -87,19 +97,10 @@ pub(crate) unsafe fn get<'a, S: Storage>(p: *const S) -> Result<&'a S::Value, Bu
 ///
 /// As [`get`], and no other reference to the words lives during `'a`.
 pub(crate) unsafe fn get_mut<'a, S: Storage>(p: *mut S) -> Result<&'a mut S::Value, BushingStatus> {
-    const { fits::<S>() };
-    if p.is_null() {
-        return Err(BushingStatus::NullPointer);
-    }
-    let slot = p.cast::<Tagged<S::Value>>();
-    // SAFETY: as in `get`, and the caller guarantees the reference is the
-    // only one to these words while it lives.
-    unsafe {
-        if (*slot).tag != S::TAG {
-            return Err(BushingStatus::NotInitialised);
-        }
-        Ok(&mut (*slot).value)
-    }
+    // SAFETY: as in `get`; `p` came as a `*mut`, so writing through it is
+    // allowed, and the caller guarantees the reference is the only one to
+    // these words while it lives.
+    unsafe { tagged(p).map(|slot| &mut (*slot.cast_mut()).value) }
 }
 
 /// The C struct at `p`, read by reference.
