@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The project's test command. On a machine that has only Rust it installs
-# what is missing (Cortex-M targets, clippy/rustfmt, QEMU, valgrind, gcc and
-# arm-none-eabi-gcc), then
+# what is missing (Cortex-M targets, clippy/rustfmt, QEMU, valgrind, gcc,
+# arm-none-eabi-gcc, and python3 with venv for the FMU's validator), then
 # runs:
 #   1. formatting and lints (host, and the Cortex-M crates for the target);
 #   2. core-nostd builds for Cortex-M4F (thumbv7em-none-eabihf) and
@@ -23,8 +23,8 @@
 #      template run in QEMU from a folder outside the workspace
 #      (scripts/template.sh), the package files, `cargo publish --dry-run`,
 #      the docs with every feature and no rustdoc warning, the doctests;
-#   7. every scene of scenes/ run with the README's command form;
-#   8. a scene's cost against its parts in host instructions (callgrind),
+#   8. every scene of scenes/ run with the README's command form;
+#   9. a scene's cost against its parts in host instructions (callgrind),
 #      printed, never asserted.
 # Costs and timings are printed, never asserted.
 set -euo pipefail
@@ -54,6 +54,7 @@ command -v qemu-system-arm >/dev/null 2>&1 || missing+=(qemu-system-arm)
 command -v gcc >/dev/null 2>&1 || missing+=(gcc)
 command -v arm-none-eabi-gcc >/dev/null 2>&1 || missing+=(gcc-arm-none-eabi)
 command -v valgrind >/dev/null 2>&1 || missing+=(valgrind)
+python3 -c 'import venv, ensurepip' >/dev/null 2>&1 || missing+=(python3 python3-venv)
 if [ ${#missing[@]} -gt 0 ]; then
     step "installing ${missing[*]}"
     as_root apt-get update -qq
@@ -129,6 +130,9 @@ step "rig-loop firmware in QEMU against bushing-sim, panic-never link check"
 
 step "C API: header, host C test, the C rig loop in QEMU against the Rust one"
 ./scripts/c-api.sh
+
+step "FMU: fmpy's validation, bit for bit against bushing-sim, rollback, misuse, time per step"
+./scripts/fmu.sh
 
 step "the firmware template, copied outside the workspace, built and run in QEMU"
 ./scripts/template.sh

@@ -39,6 +39,7 @@ pub trait Accumulator<T: Real>: Copy + Default + Debug + PartialEq {
 /// when every ω·dt of the bank is above about 1e-3 (0.2 % rate error
 /// bound from the pole's rounding: 2^-25 / h).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Multiplied<T>(pub T);
 
 impl<T: Real> Accumulator<T> for Multiplied<T> {
@@ -58,6 +59,7 @@ impl<T: Real> Accumulator<T> for Multiplied<T> {
 
 /// One word; the sum is rounded at every update.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Plain<T>(pub T);
 
 impl<T: Real> Accumulator<T> for Plain<T> {
@@ -78,6 +80,7 @@ impl<T: Real> Accumulator<T> for Plain<T> {
 /// it does not hold, the error kept in `lo` is still within one rounding of
 /// `hi`, as with [`Plain`].
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Compensated<T> {
     hi: T,
     lo: T,

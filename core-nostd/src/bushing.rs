@@ -33,6 +33,7 @@ pub struct Drive<T> {
 /// The result of one effect over one step.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct EffectOutput<T> {
     /// Force carried by the effect's branches at the end of the step, N.
     pub force: T,
@@ -345,6 +346,7 @@ pub type OutputOf<T, E> = Output<T, <E as Effect<T>>::Report>;
 /// State of a [`Bushing`]: the last accepted input, backbone force and
 /// output, the effects' states, and the fault flags.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct BushingState<T, S> {
     x: T,
     f_inf: T,

@@ -356,6 +356,7 @@ pub(crate) fn finite(param: Param, value: f64) -> Result<f64, ParamError> {
 /// assert_eq!(f.names().count(), 2);
 /// ```
 #[derive(Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Faults(u8);
 
 impl Faults {

@@ -141,7 +141,16 @@ pub struct Grunwald<T, const N: usize> {
 
 /// State of a [`Grunwald`] cell.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(bound(
+        serialize = "T: serde::Serialize",
+        deserialize = "T: serde::Deserialize<'de> + Copy + Default"
+    ))
+)]
 pub struct GrunwaldState<T, const N: usize> {
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_array"))]
     history: [T; N],
     head: usize,
     force: T,

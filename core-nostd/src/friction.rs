@@ -22,6 +22,7 @@ use crate::real::{Real, clamp, rsqrt};
 /// State shared by the single cells: last x and force (and, for Berg, the
 /// last turning point and direction).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct CellState<T> {
     x: T,
     force: T,

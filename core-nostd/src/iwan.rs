@@ -136,6 +136,7 @@ impl<T: Real> ClampCell<T> {
 /// discretisations of [`crate::discretize`] give them (the cells then
 /// saturate in order: Masing's nesting).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Held<T> {
     cells: usize,
     force: T,
@@ -151,8 +152,17 @@ impl<T: Real> Held<T> {
 
 /// The state of a clamp-form bank: each cell's force and the held run.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(bound(
+        serialize = "T: serde::Serialize",
+        deserialize = "T: serde::Deserialize<'de> + Copy + Default"
+    ))
+)]
 pub struct ClampState<T, const N: usize> {
     /// Force of each cell, in the order of the specs.
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_array"))]
     pub forces: [T; N],
     /// The leading cells held at their slip force.
     pub held: Held<T>,

@@ -27,7 +27,11 @@
 //! thesis, "seed 004"), and [`tracker`] follows the frequency and damping
 //! of measured modes on line (the modal Kalman tracker of seed 004).
 //! With feature `serde`, the module `specs` reads the parameter specs from a
-//! configuration file through their checked constructors (no alloc).
+//! configuration file through their checked constructors (no alloc), and
+//! every state ([`BushingState`] and the effects' states) and
+//! [`EffectOutput`] is `Serialize` and `Deserialize`: a state is saved and
+//! restored as plain data, for example with `postcard` (the FMU of
+//! `bushing-sim fmu` rolls back with it).
 //!
 //! ## The contract
 //!
@@ -116,6 +120,8 @@ pub mod iwan;
 pub mod maxwell;
 pub mod oscillator;
 pub mod real;
+#[cfg(feature = "serde")]
+mod serde_array;
 pub mod six_dof;
 #[cfg(feature = "serde")]
 pub mod specs;

@@ -322,7 +322,16 @@ pub enum FirstLoading {
 
 /// State of a [`TurningPoints`] model.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(bound(
+        serialize = "T: serde::Serialize",
+        deserialize = "T: serde::Deserialize<'de> + Copy + Default"
+    ))
+)]
 pub struct StackState<T, const M: usize> {
+    #[cfg_attr(feature = "serde", serde(with = "crate::serde_array"))]
     points: [(T, T); M],
     len: usize,
     dir: i8,

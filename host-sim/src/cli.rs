@@ -87,6 +87,9 @@ pub enum Command {
     },
     /// Error against cost of every kernel (docs/accuracy-cost.md).
     AccuracyCost(Box<AccuracyCostArgs>),
+    /// An FMI 2.0 co-simulation FMU of a scene's bushing, or of an
+    /// identified model.toml (docs/fmu.md).
+    Fmu(FmuArgs),
     /// One part of a scene stepped alone (for `cost --instructions`).
     #[command(hide = true)]
     CostPart {
@@ -127,6 +130,26 @@ impl SceneArgs {
         };
         Ok(Scene::load_with(&self.scene, options)?)
     }
+}
+
+/// `fmu`.
+#[derive(Debug, Args)]
+pub struct FmuArgs {
+    /// The scene or identified model.toml whose bushing the FMU carries
+    /// (its profile, ADC and output settings are not used: the master
+    /// drives the displacement).
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// The FMU file to write (`.fmu`; written whole or not at all).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// The FMU library (default: libbushing_fmu.so beside bushing-sim,
+    /// from `cargo build --release -p bushing-fmu`).
+    #[arg(long)]
+    pub library: Option<PathBuf>,
+    /// The model's name in the FMU (default: the file's stem).
+    #[arg(long)]
+    pub name: Option<String>,
 }
 
 /// `preprocess`.
@@ -529,6 +552,7 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
             print!("{text}");
             Ok(())
         }
+        Command::Fmu(a) => fmu_command(&a),
         Command::CostPart { scene, part, steps } => {
             cost::run_part_of(&scene, part, steps).map_err(|e| CliError::Failed(e.to_string()))
         }
@@ -536,6 +560,43 @@ pub fn dispatch(command: Command) -> Result<(), CliError> {
             accuracy_cost::host::run_part(calls).map_err(|e| CliError::Failed(e.to_string()))
         }
     }
+}
+
+fn fmu_command(args: &FmuArgs) -> Result<(), CliError> {
+    use crate::fmu::{self, FmuError};
+    let options = LoadOptions {
+        number: args.scene.number,
+        confine: args.scene.confine,
+    };
+    let failed = |e: FmuError| match e {
+        FmuError::Scene(s) => CliError::Scene(*s),
+        FmuError::Usage(m) | FmuError::Unsupported(m) => CliError::Usage(m),
+        other => CliError::Failed(other.to_string()),
+    };
+    fmu::check_out(&args.out).map_err(failed)?;
+    let model = fmu::FmuModel::from_scene(&args.scene.scene, options).map_err(failed)?;
+    let name = args.name.clone().unwrap_or_else(|| {
+        args.scene
+            .scene
+            .file_stem()
+            .map_or_else(|| "bushing".into(), |s| s.to_string_lossy().into_owned())
+    });
+    let library = fmu::find_library(args.library.as_deref()).map_err(failed)?;
+    fmu::write_fmu(&model, &name, &library, &args.out).map_err(failed)?;
+    let inputs: Vec<&str> = fmu::variables(&model)
+        .iter()
+        .filter(|v| v.input)
+        .map(|v| v.name)
+        .collect();
+    println!(
+        "{}: FMI 2.0 co-simulation FMU of {name} ({}, dt = {} s, inputs {}, GUID {})",
+        args.out.display(),
+        model.scene.number.name(),
+        model.scene.dt,
+        inputs.join(", "),
+        model.guid
+    );
+    Ok(())
 }
 
 fn run_command(args: &RunArgs) -> Result<(), CliError> {

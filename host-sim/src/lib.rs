@@ -18,6 +18,7 @@ pub mod cost;
 pub mod csv_text;
 pub mod family;
 pub mod fit;
+pub mod fmu;
 pub mod fractional_report;
 pub mod harmonic;
 pub mod identify;

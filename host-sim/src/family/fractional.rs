@@ -135,7 +135,11 @@ macro_rules! grunwald_menu {
         }
 
         /// State of a [`DynGrunwald`]: the core's ring of N values, boxed.
-        #[derive(Debug, PartialEq)]
+        #[derive(Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+        #[serde(bound(
+            serialize = "T: serde::Serialize",
+            deserialize = "T: serde::Deserialize<'de> + Copy + Default"
+        ))]
         pub enum DynGrunwaldState<T> {
             $(
                 #[doc = concat!("N = ", stringify!($n), ".")]

@@ -217,7 +217,7 @@ pub struct DynMaxwell<T> {
 }
 
 /// State of a [`DynMaxwell`].
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum DynMaxwellState<T> {
     /// One word per cell, `F - d F`.
     Plain(Vec<Plain<T>>),

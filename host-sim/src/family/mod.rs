@@ -288,7 +288,11 @@ macro_rules! each_effect {
 pub(crate) use each_effect;
 
 /// State of one [`AnyEffect`].
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(bound(
+    serialize = "T: serde::Serialize",
+    deserialize = "T: serde::Deserialize<'de>"
+))]
 pub enum AnyState<T: Real> {
     /// Maxwell bank.
     Maxwell(<maxwell::DynMaxwell<T> as bushing::Effect<T>>::State),

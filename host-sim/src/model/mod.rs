@@ -13,7 +13,7 @@ use crate::family::{AnyEffect, AnyState, Tuned, each_effect};
 use crate::scene::Scene;
 
 use oscillator::OscillatorModel;
-use tuned::shifted_bushing;
+pub use tuned::shifted_bushing;
 
 /// The effects a scene lists, in its order, and only those: one step
 /// visits each present effect once (no slot for an absent one).
@@ -59,7 +59,17 @@ impl<T: Real> EffectList<T> {
 }
 
 /// State of one effect of an [`EffectList`], with what its last step gave.
-#[derive(Debug, Clone)]
+/// Saved and restored as plain data (`serde`): the state and the last
+/// output; the copy kept for a refused step is scratch and not saved.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(
+    from = "SavedSlot<T>",
+    into = "SavedSlot<T>",
+    bound(
+        serialize = "T: serde::Serialize",
+        deserialize = "T: serde::Deserialize<'de>"
+    )
+)]
 pub struct Slot<T: Real> {
     /// The effect's state.
     pub state: AnyState<T>,
@@ -69,6 +79,36 @@ pub struct Slot<T: Real> {
     /// refused step can be undone without allocating (not part of the
     /// state's value: equality ignores it).
     before: (AnyState<T>, EffectOutput<T>),
+}
+
+/// What a [`Slot`] saves.
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(bound(
+    serialize = "T: serde::Serialize",
+    deserialize = "T: serde::Deserialize<'de>"
+))]
+struct SavedSlot<T: Real> {
+    state: AnyState<T>,
+    last: EffectOutput<T>,
+}
+
+impl<T: Real> From<SavedSlot<T>> for Slot<T> {
+    fn from(saved: SavedSlot<T>) -> Self {
+        Self {
+            before: (saved.state.clone(), saved.last),
+            state: saved.state,
+            last: saved.last,
+        }
+    }
+}
+
+impl<T: Real> From<Slot<T>> for SavedSlot<T> {
+    fn from(slot: Slot<T>) -> Self {
+        Self {
+            state: slot.state,
+            last: slot.last,
+        }
+    }
 }
 
 impl<T: Real> PartialEq for Slot<T> {

@@ -30,8 +30,9 @@ impl<T: Real> Tuned for EffectList<T> {
     }
 }
 
-/// `bushing` with its effects at the shift factor `a_t` (same backbone).
-pub(super) fn shifted_bushing<T: Real, E: Effect<T> + Tuned>(
+/// `bushing` with its effects at the shift factor `a_t`, absolute (same
+/// backbone; see [`Tuned::shifted`]).
+pub fn shifted_bushing<T: Real, E: Effect<T> + Tuned>(
     bushing: &Bushing<T, AnyBackbone<T>, E>,
     a_t: f64,
 ) -> Result<Bushing<T, AnyBackbone<T>, E>, ParamError> {
