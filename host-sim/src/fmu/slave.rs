@@ -301,32 +301,38 @@ impl Slave {
         self.guard(r)
     }
 
-    /// `fmi2EnterInitializationMode`.
-    pub fn enter_initialization(&mut self) -> Result<(), Report> {
-        let r = self.expect("fmi2EnterInitializationMode", &[Phase::Instantiated]);
+    /// `call` moves the slave from phase `from` to phase `to`, and is
+    /// refused in any other phase.
+    fn transition(&mut self, call: &str, from: Phase, to: Phase) -> Result<(), Report> {
+        let r = self.expect(call, &[from]);
         if r.is_ok() {
-            self.common.phase = Phase::Initialization;
+            self.common.phase = to;
         }
         self.guard(r)
+    }
+
+    /// `fmi2EnterInitializationMode`.
+    pub fn enter_initialization(&mut self) -> Result<(), Report> {
+        self.transition(
+            "fmi2EnterInitializationMode",
+            Phase::Instantiated,
+            Phase::Initialization,
+        )
     }
 
     /// `fmi2ExitInitializationMode`: the bushing is at rest at the
     /// displacement input.
     pub fn exit_initialization(&mut self) -> Result<(), Report> {
-        let r = self.expect("fmi2ExitInitializationMode", &[Phase::Initialization]);
-        if r.is_ok() {
-            self.common.phase = Phase::StepComplete;
-        }
-        self.guard(r)
+        self.transition(
+            "fmi2ExitInitializationMode",
+            Phase::Initialization,
+            Phase::StepComplete,
+        )
     }
 
     /// `fmi2Terminate`.
     pub fn terminate(&mut self) -> Result<(), Report> {
-        let r = self.expect("fmi2Terminate", &[Phase::StepComplete]);
-        if r.is_ok() {
-            self.common.phase = Phase::Terminated;
-        }
-        self.guard(r)
+        self.transition("fmi2Terminate", Phase::StepComplete, Phase::Terminated)
     }
 
     /// `fmi2Reset`: as instantiated, every input at its start value.
