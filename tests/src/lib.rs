@@ -57,7 +57,7 @@ use oscillator::iwan_oscillator_free_decay_f32;
 use stack::{stack_madelung_overflow_f32, stack_masing_f32};
 use tracker::{
     instantaneous_modulus_maxwell_bank_f32, modal_tracker_fit_gap_reacquire_f32,
-    modal_tracker_free_decay_f32,
+    modal_tracker_free_decay_f32, modal_tracker_modes_fixed_same_bits_f32,
 };
 use xf::{xf_exact_ramp_saturates_f32, xf_midpoint_under_saturation_f32};
 
@@ -144,6 +144,12 @@ pub const CASES: &[Case] = &[
     }),
     ("modal_tracker_fit_gap_reacquire_ukf_f32", || {
         modal_tracker_fit_gap_reacquire_f32(Filter::Ukf(UtParams::default()))
+    }),
+    ("modal_tracker_modes_fixed_same_bits_ekf_f32", || {
+        modal_tracker_modes_fixed_same_bits_f32(Filter::Ekf)
+    }),
+    ("modal_tracker_modes_fixed_same_bits_ukf_f32", || {
+        modal_tracker_modes_fixed_same_bits_f32(Filter::Ukf(UtParams::default()))
     }),
 ];
 

@@ -2,8 +2,8 @@
 //! instantaneous modulus of a Maxwell bank.
 
 use bushing::tracker::{
-    Channel, Filter, Measured, ModalTracker, ModulusSpec, ModulusTracker, SensorFit, SensorSpec,
-    SineSpec, Tuning, fit_first_period,
+    Channel, Filter, Measured, ModalTracker, ModeInit, ModulusSpec, ModulusTracker, SensorFit,
+    SensorSpec, SineSpec, Tuning, fit_first_period,
 };
 use bushing::{Bushing, MaxwellBank, MaxwellForm, MaxwellSpec, Polynomial};
 
@@ -203,4 +203,70 @@ pub(crate) fn instantaneous_modulus_maxwell_bank_f32() -> CaseResult {
     }
     at_most("storage modulus, relative error", storage, 5e-3)?;
     at_most("loss modulus, relative error", loss, 5e-3)
+}
+
+/// A two-mode tracker on three accelerometers (16 states) with its mode
+/// count fixed at compile time against the same tracker with it given at
+/// run time: bit for bit the same estimate and covariance after every
+/// step of two close modes in noise, on the host and on every target.
+pub(crate) fn modal_tracker_modes_fixed_same_bits_f32(filter: Filter) -> CaseResult {
+    let dt = 1e-3;
+    let sensors = [SensorSpec {
+        measured: Measured::Acceleration,
+        noise: 0.5,
+    }; 3];
+    let modes = [
+        ModeInit {
+            frequency: 20.0,
+            damping: 0.01,
+        },
+        ModeInit {
+            frequency: 31.0,
+            damping: 0.01,
+        },
+    ];
+    let amplitudes = [
+        (1.0, 0.0),
+        (0.6, 0.2),
+        (-0.8, 0.1),
+        (0.5, 0.0),
+        (-1.0, 0.3),
+        (0.9, 0.0),
+    ];
+    let tuning = Tuning::default();
+    let fixed = ModalTracker::<f32, 16, 2>::new(dt, &sensors, &modes, &amplitudes, &tuning, filter)
+        .map_err(param)?;
+    let free = ModalTracker::<f32, 16>::new(dt, &sensors, &modes, &amplitudes, &tuning, filter)
+        .map_err(param)?;
+    let (mut a, mut b) = (fixed.start(), free.start());
+    let mut rng = Noise::new(17);
+    let w = [20.2, 30.7].map(|f: f64| core::f64::consts::TAU * f);
+    for k in 1..=300 {
+        let t = k as f64 * dt;
+        let y: [f32; 3] = core::array::from_fn(|c| {
+            let shape = [[1.0, 0.5], [0.6, -1.0], [-0.8, 0.9]][c];
+            let z = shape[0] * libm::cos(w[0] * t) + shape[1] * libm::sin(w[1] * t);
+            (z + 0.5 * rng.gauss()) as f32
+        });
+        let (ra, rb) = (fixed.step(&mut a, &y), free.step(&mut b, &y));
+        let same = ra == rb
+            && a.x()
+                .iter()
+                .zip(b.x())
+                .all(|(p, q)| p.to_bits() == q.to_bits())
+            && a.covariance()
+                .iter()
+                .flatten()
+                .zip(b.covariance().iter().flatten())
+                .all(|(p, q)| p.to_bits() == q.to_bits());
+        if !same {
+            return Err(Failure {
+                what: "the two forms differ at step",
+                got: k as f64,
+                bound: 0.0,
+                bits: None,
+            });
+        }
+    }
+    holds("a finite estimate", a.x().iter().all(|v| v.is_finite()))
 }

@@ -474,12 +474,12 @@ mod firmware {
     }
 
     type TrackerState<const N: usize> = bushing::tracker::ModalState<f32, N>;
-    type TrackerStep<const N: usize, const S: usize> =
-        fn(&ModalTracker<f32, N>, &mut TrackerState<N>, &[f32; S]) -> ModalReport;
+    type TrackerStep<const N: usize, const S: usize, const M: usize> =
+        fn(&ModalTracker<f32, N, M>, &mut TrackerState<N>, &[f32; S]) -> ModalReport;
 
     #[inline(never)]
-    fn tracker_step<const N: usize, const S: usize>(
-        t: &ModalTracker<f32, N>,
+    fn tracker_step<const N: usize, const S: usize, const M: usize>(
+        t: &ModalTracker<f32, N, M>,
         s: &mut TrackerState<N>,
         y: &[f32; S],
     ) -> ModalReport {
@@ -488,8 +488,8 @@ mod firmware {
 
     /// The stand-in for [`tracker_step`].
     #[inline(never)]
-    fn tracker_empty<const N: usize, const S: usize>(
-        _: &ModalTracker<f32, N>,
+    fn tracker_empty<const N: usize, const S: usize, const M: usize>(
+        _: &ModalTracker<f32, N, M>,
         _: &mut TrackerState<N>,
         y: &[f32; S],
     ) -> ModalReport {
@@ -501,8 +501,13 @@ mod firmware {
 
     /// One tracker update (predict, then every sensor's scalar update) on a
     /// 20 Hz sine at 1 kHz seen by `S` accelerometers with mode-shape-like
-    /// factors, `N` states.
-    fn tracker<const N: usize, const S: usize>(name: &str, filter: Filter, modes: &[ModeInit]) {
+    /// factors, `N` states, `M` modes fixed at compile time (0: the number
+    /// of `modes`, given at run time).
+    fn tracker<const N: usize, const S: usize, const M: usize>(
+        name: &str,
+        filter: Filter,
+        modes: &[ModeInit],
+    ) {
         let sensors = [SensorSpec {
             measured: Measured::Acceleration,
             noise: 0.01,
@@ -511,7 +516,7 @@ mod firmware {
         let Some(amplitudes) = amplitudes.get(..modes.len() * S) else {
             fail()
         };
-        let Ok(tracker) = ModalTracker::<f32, N>::new(
+        let Ok(tracker) = ModalTracker::<f32, N, M>::new(
             1e-3,
             &sensors,
             modes,
@@ -531,13 +536,13 @@ mod firmware {
                 let x = xs.get(k).copied().unwrap_or(0.0);
                 core::array::from_fn(|i| x * shape[i % 3])
             });
-            let f: TrackerStep<N, S> = tracker_step::<N, S>;
+            let f: TrackerStep<N, S, M> = tracker_step::<N, S, M>;
             let spans = measure_three(
                 &tracker,
                 || tracker.start(),
                 &samples,
                 f,
-                tracker_empty::<N, S>,
+                tracker_empty::<N, S, M>,
             );
             let line = Line {
                 number: "f32",
@@ -985,17 +990,22 @@ mod firmware {
             },
         ];
         let ukf = Filter::Ukf(UtParams::default());
-        tracker::<4, 1>("ekf/1-mode-1-acc", Filter::Ekf, &[mode]);
-        tracker::<4, 1>("ukf/1-mode-1-acc", ukf, &[mode]);
-        tracker::<16, 3>("ekf/2-modes-3-acc", Filter::Ekf, &two);
-        tracker::<16, 3>("ukf/2-modes-3-acc", ukf, &two);
+        // From 8 states on with the mode count fixed at compile time, the
+        // form a firmware names; the 16 states also with it given at run
+        // time, for comparison.
+        tracker::<4, 1, 0>("ekf/1-mode-1-acc", Filter::Ekf, &[mode]);
+        tracker::<4, 1, 0>("ukf/1-mode-1-acc", ukf, &[mode]);
+        tracker::<16, 3, 2>("ekf/2-modes-3-acc", Filter::Ekf, &two);
+        tracker::<16, 3, 2>("ukf/2-modes-3-acc", ukf, &two);
+        tracker::<16, 3, 0>("ekf/2-modes-3-acc/modes-at-run-time", Filter::Ekf, &two);
+        tracker::<16, 3, 0>("ukf/2-modes-3-acc/modes-at-run-time", ukf, &two);
         // The sizes between, for the growth of the cost with the states.
-        tracker::<6, 2>("ekf/1-mode-2-acc", Filter::Ekf, &[mode]);
-        tracker::<6, 2>("ukf/1-mode-2-acc", ukf, &[mode]);
-        tracker::<8, 1>("ekf/2-modes-1-acc", Filter::Ekf, &two);
-        tracker::<8, 1>("ukf/2-modes-1-acc", ukf, &two);
-        tracker::<12, 2>("ekf/2-modes-2-acc", Filter::Ekf, &two);
-        tracker::<12, 2>("ukf/2-modes-2-acc", ukf, &two);
+        tracker::<6, 2, 0>("ekf/1-mode-2-acc", Filter::Ekf, &[mode]);
+        tracker::<6, 2, 0>("ukf/1-mode-2-acc", ukf, &[mode]);
+        tracker::<8, 1, 2>("ekf/2-modes-1-acc", Filter::Ekf, &two);
+        tracker::<8, 1, 2>("ukf/2-modes-1-acc", ukf, &two);
+        tracker::<12, 2, 2>("ekf/2-modes-2-acc", Filter::Ekf, &two);
+        tracker::<12, 2, 2>("ukf/2-modes-2-acc", ukf, &two);
 
         first_period_fit();
         temperature();
@@ -1013,7 +1023,7 @@ mod firmware {
             iwan::<f32, 16>(run);
             whole(("bushing", "default/spline+4maxwell+3jenkins", 7), &b, run);
         });
-        tracker::<4, 1>("ekf/1-mode-1-acc", Filter::Ekf, &[mode]);
+        tracker::<4, 1, 0>("ekf/1-mode-1-acc", Filter::Ekf, &[mode]);
         six_dof();
     }
 

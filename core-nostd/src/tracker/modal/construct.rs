@@ -43,7 +43,7 @@ fn variance<T: Real>(
     }
 }
 
-impl<T: Real, const N: usize> ModalTracker<T, N> {
+impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// A tracker for `modes.len()` modes seen by `sensors.len()` sensors at
     /// time step `dt`. `amplitudes[m * C + c]` is the complex amplitude
     /// `(re, im)` of mode m in the signal of sensor c at the first sample,
@@ -64,6 +64,13 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                 param: Param::scalar(if c_n == 0 { "sensors" } else { "modes" }),
                 min: 1,
                 got: 0,
+            });
+        }
+        if M > 0 && m_n != M {
+            return Err(ParamError::LengthMismatch {
+                param: Param::scalar("modes"),
+                expected: M,
+                got: m_n,
             });
         }
         let block = 2 * c_n + 2;

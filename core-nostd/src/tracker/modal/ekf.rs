@@ -7,7 +7,7 @@ use super::rotation::rotation_cached;
 use super::{Core, Measured, ModalTracker};
 use crate::real::Real;
 
-impl<T: Real, const N: usize> ModalTracker<T, N> {
+impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// EKF prediction: x = f(x), P = F P Fᵀ + Q. F is the identity on the
     /// θ and λ rows; on a pair's rows it holds the rotation `(ec, es)` and
     /// the derivatives `(-b', a')`, `(a', b')` by θ and λ. Below 8 states
@@ -203,6 +203,18 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
                     .take(used)
                     .skip(1)
                     .fold(first, |acc, (&j, &hj)| acc + get(&row, j) * hj);
+            }
+        } else if M > 0 {
+            // The observed states known at compile time: each v_i a
+            // register, summed over its column's observed entries in the
+            // order of the whole-row sums below (from zero), so the same
+            // numbers.
+            for (i, vi) in v.iter_mut().enumerate() {
+                let mut acc = T::ZERO;
+                for (&j, &hj) in idx.iter().zip(&h).take(used) {
+                    acc += entry(&state.p, j, i) * hj;
+                }
+                *vi = acc;
             }
         } else {
             // P is symmetric: v is the sum of h_j times row j, whole rows.

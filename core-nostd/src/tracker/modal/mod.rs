@@ -75,14 +75,16 @@
 //!   sigma points' from the centre's by a fourth-order series; the sin/cos
 //!   polynomial and `e^λ` run only when an anchor moves. Below 8 states
 //!   (one mode) the whole step is unrolled, at 4 states on a copy of the
-//!   state held in registers. No f64, no libm trig and no square root per
-//!   sample.
+//!   state held in registers; from 8 on, a mode count given as the type
+//!   parameter `M` ([`ModalTracker`]) makes every loop count a constant
+//!   too. No f64, no libm trig and no square root per sample.
 //!   Guest instructions per call of `step` through a non-inlined function
 //!   on Cortex-M4F, worst of three inputs (QEMU, f32; `cargo run -q -p
 //!   bushing-boards --release --target thumbv7em-none-eabihf --bin
 //!   kernel-cost`, family `tracker`): one mode and one accelerometer
 //!   (4 states) EKF 427, UKF 1 078; two modes and three accelerometers
-//!   (16 states) EKF 14 294, UKF 42 901. Estimated cycles in
+//!   (16 states) with `M = 2` EKF 11 094, UKF 36 027, and with the mode
+//!   count given at run time EKF 14 294, UKF 42 901. Estimated cycles in
 //!   `docs/accuracy-cost.md`.
 
 // The parts: the public inputs and outputs (`types`), construction
@@ -146,7 +148,17 @@ impl<T: Real, const N: usize> ModalState<T, N> {
     }
 }
 
-/// The tracker's parameters (see the module docs).
+/// The tracker's parameters (see the module docs): `N` states and, with
+/// `M` > 0, `M` modes fixed at compile time.
+///
+/// `M = 0` (the default) takes the number of modes from
+/// [`ModalTracker::new`] at run time. A firmware whose mode count is known
+/// should name it: from 8 states on (two modes or more), every per-sample
+/// loop then has a constant trip count that the optimiser unrolls, and
+/// the step is the same arithmetic in fewer instructions (the two-mode
+/// trackers of `docs/accuracy-cost.md` are measured both ways; about half
+/// the EKF's instructions at 8 states). `new` refuses a mode count other
+/// than a non-zero `M`. Below 8 states there is one mode either way.
 ///
 /// ```
 /// use bushing::ParamError;
@@ -184,10 +196,29 @@ impl<T: Real, const N: usize> ModalState<T, N> {
 ///     Filter::Ekf,
 /// );
 /// assert!(r.is_err());
+///
+/// // Two modes on one sensor (8 states), the mode count fixed at compile
+/// // time: the same numbers as `ModalTracker::<f32, 8>`, in fewer
+/// // instructions.
+/// let modes = [ModeInit { frequency: 12.0, damping: 0.0 }, ModeInit { frequency: 31.0, damping: 0.0 }];
+/// let sensor = [SensorSpec { measured: Measured::Displacement, noise: 1e-3 }];
+/// let (amplitudes, tuning) = ([(0.0, -1.0), (0.0, -0.3)], Tuning::default());
+/// let two = ModalTracker::<f32, 8, 2>::new(1e-3, &sensor, &modes, &amplitudes, &tuning, Filter::Ekf)?;
+/// let free = ModalTracker::<f32, 8>::new(1e-3, &sensor, &modes, &amplitudes, &tuning, Filter::Ekf)?;
+/// let (mut a, mut b) = (two.start(), free.start());
+/// for n in 0..500 {
+///     let t = n as f64 * 1e-3;
+///     let x = (w * t).sin() + 0.3 * (core::f64::consts::TAU * 31.0 * t).sin();
+///     assert_eq!(two.step(&mut a, &[x as f32]), free.step(&mut b, &[x as f32]));
+/// }
+/// assert_eq!(a.x(), b.x());
+/// // A mode count other than M is refused.
+/// let one = ModalTracker::<f32, 8, 2>::new(1e-3, &sensor, &modes[..1], &amplitudes, &tuning, Filter::Ekf);
+/// assert!(matches!(one, Err(ParamError::LengthMismatch { expected: 2, got: 1, .. })));
 /// # Ok::<(), ParamError>(())
 /// ```
 #[derive(Debug, Clone, PartialEq)]
-pub struct ModalTracker<T, const N: usize> {
+pub struct ModalTracker<T, const N: usize, const M: usize = 0> {
     modes: usize,
     sensors: usize,
     dt: f64,
@@ -247,7 +278,7 @@ struct Weights<T> {
     shift: T,
 }
 
-impl<T: Real, const N: usize> ModalTracker<T, N> {
+impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// Number of modes.
     pub fn modes(&self) -> usize {
         self.modes
@@ -262,17 +293,27 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     }
 
     /// Number of modes for the per-sample code: a mode takes at least four
-    /// states, so below eight there is one, known at compile time.
+    /// states, so below eight there is one, known at compile time, as it is
+    /// for a non-zero `M`.
     #[inline(always)]
     fn m_n(&self) -> usize {
-        if N < 8 { 1 } else { self.modes }
+        if N < 8 {
+            1
+        } else if M > 0 {
+            M
+        } else {
+            self.modes
+        }
     }
 
-    /// Number of sensors for the per-sample code: with one mode, `(N - 2)/2`.
+    /// Number of sensors for the per-sample code: with one mode, `(N - 2)/2`;
+    /// with `M` modes, `(N/M - 2)/2`.
     #[inline(always)]
     fn c_n(&self) -> usize {
         if N < 8 {
             N.saturating_sub(2) / 2
+        } else if let Some(per_mode) = N.checked_div(M) {
+            per_mode.saturating_sub(2) / 2
         } else {
             self.sensors
         }
@@ -283,6 +324,8 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     fn pivot(&self, t: usize) -> usize {
         if N < 8 {
             t
+        } else if M > 0 && t < 2 * M {
+            (t / 2) * self.block() + t % 2
         } else {
             self.pivots.get(t).copied().unwrap_or(0)
         }

@@ -7,7 +7,7 @@ use super::{Core, Measured, ModalTracker};
 use crate::real::Real;
 use crate::tracker::fast::clamp;
 
-impl<T: Real, const N: usize> ModalTracker<T, N> {
+impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// θ and λ into their bands, the diagonal above its floor.
     #[inline(always)]
     pub(super) fn constrain(&self, state: &mut Core<T, N>) {

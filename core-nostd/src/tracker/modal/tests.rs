@@ -308,6 +308,16 @@ fn non_finite_samples_are_refused_and_the_state_kept() {
 // update against the Joseph form written out.
 
 fn tracker<const N: usize>(modes: usize, sensors: usize, filter: Filter) -> ModalTracker<f64, N> {
+    tracker_as::<f64, N, 0>(modes, sensors, filter)
+}
+
+/// [`tracker`] in `T`, with `M` modes fixed at compile time (0: at run
+/// time).
+fn tracker_as<T: Real, const N: usize, const M: usize>(
+    modes: usize,
+    sensors: usize,
+    filter: Filter,
+) -> ModalTracker<T, N, M> {
     let kinds = [
         Measured::Acceleration,
         Measured::Velocity,
@@ -629,6 +639,88 @@ fn check_filters<const N: usize>(modes: usize, sensors: usize) {
         let mut anchor = [[f64::NAN; 4]; N];
         assert!(!tr.predict_ukf(&mut bad, &mut anchor, &mut ukf::Scratch::new()));
     }
+}
+
+/// Bit for bit the same state (an anchor's θ may be NaN).
+fn same_bits<const N: usize>(a: &ModalState<f32, N>, b: &ModalState<f32, N>) -> bool {
+    let bits = |s: &ModalState<f32, N>| {
+        let (x, p, anchor) = (s.core.x, s.core.p, s.anchor);
+        x.into_iter()
+            .chain(p.into_iter().flatten())
+            .chain(anchor.into_iter().flatten())
+            .map(f32::to_bits)
+    };
+    bits(a).eq(bits(b))
+        && (a.core.faded, a.core.run) == (b.core.faded, b.core.run)
+        && (a.outliers, a.repairs, a.reacquisitions) == (b.outliers, b.repairs, b.reacquisitions)
+}
+
+/// A two-mode tracker with its mode count fixed at compile time against
+/// the same tracker with it given at run time, in f32: the same numbers
+/// at every step, through gated outliers, a refused sample, a
+/// re-acquisition and the fade of the second mode.
+fn same_with_modes_at_compile_time<const N: usize>(sensors: usize, filter: Filter) {
+    let fixed = tracker_as::<f32, N, 2>(2, sensors, filter);
+    let free = tracker_as::<f32, N, 0>(2, sensors, filter);
+    let (mut a, mut b) = (fixed.start(), free.start());
+    let mut rng = Noise::new(0x5eed + N as u64);
+    let (mut faded, mut gated, mut reacquired) = (false, 0u32, false);
+    for k in 0..4000 {
+        let t = k as f64 * 1e-3;
+        // The second mode dies out after the first second.
+        let second = if k < 1000 { 0.8 } else { 0.0 };
+        let y: [f32; 3] = core::array::from_fn(|c| {
+            let shape = [1.0, -0.7, 0.4][c];
+            let z = (core::f64::consts::TAU * 20.0 * t).sin()
+                + second * shape * (core::f64::consts::TAU * 57.0 * t).cos()
+                + 1e-2 * rng.gauss();
+            match k {
+                // Outliers, one alone and then a run that re-acquires.
+                500 | 1500..=1520 => 1e3,
+                700 if c == 0 => f32::NAN,
+                _ => z as f32,
+            }
+        });
+        let (ra, rb) = (fixed.step(&mut a, &y), free.step(&mut b, &y));
+        assert_eq!(ra, rb, "step {k}");
+        assert!(same_bits(&a, &b), "step {k}: {a:?} against {b:?}");
+        gated += u32::from(ra.gated);
+        reacquired |= ra.reacquired;
+        faded |= fixed.mode(&a, 1).faded;
+    }
+    assert!(
+        gated > 0 && reacquired && faded,
+        "{gated} {reacquired} {faded}"
+    );
+}
+
+#[test]
+fn modes_fixed_at_compile_time_step_the_same_numbers() {
+    for filter in [Filter::Ekf, Filter::Ukf(UtParams::default())] {
+        same_with_modes_at_compile_time::<8>(1, filter);
+        same_with_modes_at_compile_time::<12>(2, filter);
+        same_with_modes_at_compile_time::<16>(3, filter);
+    }
+    // A count other than M is refused.
+    let r = ModalTracker::<f32, 8, 2>::new(
+        1e-3,
+        &sensor(),
+        &[ModeInit {
+            frequency: 20.0,
+            damping: 0.0,
+        }],
+        &[(1.0, 0.0)],
+        &Tuning::default(),
+        Filter::Ekf,
+    );
+    assert_eq!(
+        r,
+        Err(ParamError::LengthMismatch {
+            param: Param::scalar("modes"),
+            expected: 2,
+            got: 1,
+        })
+    );
 }
 
 #[test]

@@ -25,7 +25,7 @@ impl<T: Real, const N: usize> Scratch<T, N> {
     }
 }
 
-impl<T: Real, const N: usize> ModalTracker<T, N> {
+impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// UKF prediction. With θ and λ factored first, the sigma points of the
     /// amplitude columns `x ± γ l_t` share the centre's θ and λ, so the
     /// process moves them linearly: `f(x) ± γ R l_t`, R the centre's
@@ -570,7 +570,7 @@ impl<T: Real, const N: usize> ModalTracker<T, N> {
     }
 }
 
-impl<T: Real, const N: usize> ModalTracker<T, N> {
+impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// The θ and λ columns of the Cholesky factor of P in the order θ, λ of
     /// every mode, then the amplitudes (8 states or more), left-looking:
     /// column t is P's pivot column less the columns before it times their
