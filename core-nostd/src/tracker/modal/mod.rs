@@ -83,8 +83,8 @@
 //!   bushing-boards --release --target thumbv7em-none-eabihf --bin
 //!   kernel-cost`, family `tracker`): one mode and one accelerometer
 //!   (4 states) EKF 427, UKF 1 078; two modes and three accelerometers
-//!   (16 states) with `M = 2` EKF 11 094, UKF 36 027, and with the mode
-//!   count given at run time EKF 14 294, UKF 42 901. Estimated cycles in
+//!   (16 states) with `M = 2` EKF 11 093, UKF 35 408, and with the mode
+//!   count given at run time EKF 14 322, UKF 41 170. Estimated cycles in
 //!   `docs/accuracy-cost.md`.
 
 // The parts: the public inputs and outputs (`types`), construction

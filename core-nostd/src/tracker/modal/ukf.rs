@@ -318,20 +318,45 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
             let Some(row) = row.get_mut(from..) else {
                 continue;
             };
-            // A mode's four deviations (θ and λ, plus and minus) at a time.
-            for quad in dev.chunks_exact(4).take(m_n) {
-                let [d0, d1, d2, d3] = quad else { continue };
-                let f = |d: &[T; N]| w.wi * get(d, i);
-                let (k0, k1, k2, k3) = (f(d0), f(d1), f(d2), f(d3));
-                let (Some(d0), Some(d1), Some(d2), Some(d3)) = (
-                    d0.get(from..),
-                    d1.get(from..),
-                    d2.get(from..),
-                    d3.get(from..),
-                ) else {
+            // Two modes' four deviations (θ and λ, plus and minus) at a
+            // time, each mode's sum added in turn; then a last odd mode.
+            let quads = dev.get(..4 * m_n).unwrap_or(&[]);
+            let f = |d: &[T; N]| w.wi * get(d, i);
+            fn from_on<T>(d: &[T], from: usize) -> &[T] {
+                d.get(from..).unwrap_or(&[])
+            }
+            let mut pairs = quads.chunks_exact(8);
+            for octet in &mut pairs {
+                let [d0, d1, d2, d3, e0, e1, e2, e3] = octet else {
                     continue;
                 };
-                for ((((v, &a), &b), &c), &d) in row.iter_mut().zip(d0).zip(d1).zip(d2).zip(d3) {
+                let (k0, k1, k2, k3) = (f(d0), f(d1), f(d2), f(d3));
+                let (g0, g1, g2, g3) = (f(e0), f(e1), f(e2), f(e3));
+                let ds = from_on(d0, from)
+                    .iter()
+                    .zip(from_on(d1, from))
+                    .zip(from_on(d2, from))
+                    .zip(from_on(d3, from));
+                let es = from_on(e0, from)
+                    .iter()
+                    .zip(from_on(e1, from))
+                    .zip(from_on(e2, from))
+                    .zip(from_on(e3, from));
+                for ((v, (((&a, &b), &c), &d)), (((&p, &q), &r), &u)) in
+                    row.iter_mut().zip(ds).zip(es)
+                {
+                    *v = (*v + (k0 * a + k1 * b + k2 * c + k3 * d))
+                        + (g0 * p + g1 * q + g2 * r + g3 * u);
+                }
+            }
+            if let [d0, d1, d2, d3] = pairs.remainder() {
+                let (k0, k1, k2, k3) = (f(d0), f(d1), f(d2), f(d3));
+                let ds = from_on(d0, from)
+                    .iter()
+                    .zip(from_on(d1, from))
+                    .zip(from_on(d2, from))
+                    .zip(from_on(d3, from));
+                for (v, (((&a, &b), &c), &d)) in row.iter_mut().zip(ds) {
                     *v += k0 * a + k1 * b + k2 * c + k3 * d;
                 }
             }
