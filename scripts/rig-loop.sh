@@ -94,6 +94,12 @@ for target in thumbv7em-none-eabihf thumbv7m-none-eabi; do
     cargo run -q --release -p bushing-boards --target "$target" --bin every-model >"$log" \
         || { grep -Ev 'faults=0x0 not_finite=0$' "$log" | tail -n 20; exit 1; }
     grep -E '^(every-model|models|memory|verdict)' "$log"
+    # The UKF with its mode count fixed at compile time steps the same
+    # numbers as with it given at run time: the same checksum.
+    sums=$(grep -E '^model tracker/modal-ukf(-modes-fixed)? ' "$log" | grep -o 'checksum=[0-9a-f]*' | sort -u)
+    [ "$(grep -c . <<<"$sums")" = 1 ] \
+        || { echo "error: the two forms of the modal UKF differ on $target:" >&2; echo "$sums" >&2; exit 1; }
+    echo "$target: modal UKF, modes at run time and fixed at compile time, the same checksum ($sums)"
 done
 
 step "panic-never link check of the release images (rig loop, every model; M4F f32, M3 Q16)"
