@@ -324,8 +324,19 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     fn pivot(&self, t: usize) -> usize {
         if N < 8 {
             t
-        } else if M > 0 && t < 2 * M {
-            (t / 2) * self.block() + t % 2
+        } else if M > 0 {
+            // θ and λ of every mode, then each mode's amplitudes in turn.
+            let block = self.block();
+            match t.checked_sub(2 * M) {
+                None => (t / 2) * block + t % 2,
+                Some(k) => {
+                    let per = block - 2;
+                    let (Some(m), Some(i)) = (k.checked_div(per), k.checked_rem(per)) else {
+                        return 0;
+                    };
+                    m * block + 2 + i
+                }
+            }
         } else {
             self.pivots.get(t).copied().unwrap_or(0)
         }

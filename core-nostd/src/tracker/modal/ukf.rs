@@ -8,19 +8,17 @@ use super::{Core, ModalTracker};
 use crate::real::Real;
 use crate::tracker::fast::{min_positive, rsqrt};
 
-/// Working arrays of a UKF step, zeroed once per step and written before
-/// they are read: the factor's θ and λ columns (one row each) and, from 8
-/// states on, the sigma points' deviations.
+/// Working array of a UKF step, zeroed once per step and written before
+/// it is read: the factor's θ and λ columns (one row each), shared by the
+/// prediction and every innovation.
 pub(super) struct Scratch<T, const N: usize> {
     cols: [[T; N]; N],
-    dev: [[T; N]; N],
 }
 
 impl<T: Real, const N: usize> Scratch<T, N> {
     pub(super) fn new() -> Self {
         Self {
             cols: [[T::ZERO; N]; N],
-            dev: [[T::ZERO; N]; N],
         }
     }
 }
@@ -133,8 +131,9 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     }
 
     /// [`Self::predict_ukf`] from 8 states on, by mode blocks. Only the θ
-    /// and λ pivots are eliminated, from a copy of P: their columns of the
-    /// factor and S, `P - Σ_t l_t l_tᵀ` on the amplitude rows. With `D` the
+    /// and λ pivots are eliminated: their columns of the factor
+    /// ([`Self::leading_columns`]) and, in a copy of P, S =
+    /// `P - Σ_t l_t l_tᵀ` on the amplitude rows. With `D` the
     /// deviations of the θ and λ columns' sigma points from the propagated
     /// centre `f(x)` (for a mode whose θ and λ the column leaves alone,
     /// exactly `±γ R l_t`, so computed) and `δ = W_i Σ D`, the mean is
@@ -143,8 +142,9 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// transform as with the deviations from the mean (tested against all
     /// 2n + 1 points), without a difference of two nearly equal sums; the
     /// δδᵀ term is folded into the deviations, as `D - c δ`.
-    /// The amplitude block of S is then factored in place, which checks
-    /// that P is positive definite (false if not).
+    /// Once `R S Rᵀ` is formed, the amplitude block of S is factored in
+    /// place, which checks that P is positive definite (false if not), and
+    /// the copy then holds the deviations.
     #[inline(always)]
     fn predict_ukf_blocks(
         &self,
@@ -154,37 +154,37 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     ) -> bool {
         let (m_n, k_n, block) = (self.m_n(), 2 * self.m_n(), self.block());
         let w = self.ut;
-        let Scratch { cols, dev } = scratch;
-        // The θ and λ pivots eliminated from a copy of P, right-looking:
-        // cols[t] gets column t of the factor, and the rows not yet
-        // eliminated (whole rows) their Schur complement, so S on the
-        // amplitude rows (exactly symmetric); then zero on the θ and λ
-        // columns of those rows.
+        let cols = &mut scratch.cols;
+        // The θ and λ columns of the factor, then S on the amplitude rows:
+        // `P - Σ_t l_t l_tᵀ`, subtracted in the order of t, each row from
+        // the multiple of 4 at or below the diagonal (what lies before is
+        // never read); then zero on the θ and λ columns of those rows.
+        if !self.leading_columns(&state.p, cols) {
+            return false;
+        }
         let mut s = state.p;
-        let mut done = [false; N];
-        for (t, col) in cols.iter_mut().enumerate().take(k_n) {
-            let pt = self.pivot(t);
-            let d = entry(&s, pt, pt);
-            if !pivot_ok(d) {
-                return false;
-            }
-            let r = rsqrt(d);
-            put(&mut done, pt, true);
-            let mut l = [T::ZERO; N];
-            for ((li, row), &di) in l.iter_mut().zip(&s).zip(&done) {
-                if !di {
-                    *li = get(row, pt) * r;
+        let leading = cols.get(..k_n).unwrap_or(&[]);
+        for (i, row) in s.iter_mut().enumerate() {
+            let from = i & !3;
+            let (true, Some(row)) = (self.is_amplitude(i), row.get_mut(from..)) else {
+                continue;
+            };
+            let tail = |l| from_on(l, from).iter();
+            let mut quads = leading.chunks_exact(4);
+            for quad in &mut quads {
+                let [l0, l1, l2, l3] = quad else { continue };
+                let (a0, a1, a2, a3) = (get(l0, i), get(l1, i), get(l2, i), get(l3, i));
+                let ls = tail(l0).zip(tail(l1)).zip(tail(l2)).zip(tail(l3));
+                for (v, (((&b0, &b1), &b2), &b3)) in row.iter_mut().zip(ls) {
+                    *v = (((*v - a0 * b0) - a1 * b1) - a2 * b2) - a3 * b3;
                 }
             }
-            for ((row, &li), &di) in s.iter_mut().zip(&l).zip(&done) {
-                if !di {
-                    for (v, &lj) in row.iter_mut().zip(&l) {
-                        *v -= li * lj;
-                    }
+            if let [l0, l1] = quads.remainder() {
+                let (a0, a1) = (get(l0, i), get(l1, i));
+                for (v, (&b0, &b1)) in row.iter_mut().zip(tail(l0).zip(tail(l1))) {
+                    *v = (*v - a0 * b0) - a1 * b1;
                 }
             }
-            put(&mut l, pt, d * r);
-            *col = l;
         }
         for (i, row) in s.iter_mut().enumerate() {
             if self.is_amplitude(i) {
@@ -199,12 +199,16 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
         let mut f0 = x;
         let rot = self.rotate_blocks(&mut f0, anchor);
         let p = &mut state.p;
-        // R S Rᵀ: the pair rows of S turned (θ and λ rows zero), then the
-        // pair columns on and above the diagonal.
-        for ((rows, srows), &r) in p
+        // R S Rᵀ: the pair rows of S turned (θ and λ rows zero), each from
+        // the multiple of 4 at or below the diagonal (what lies before is
+        // replaced by the mirror), then the pair columns on and above the
+        // diagonal.
+        for (first, ((rows, srows), &r)) in p
             .chunks_exact_mut(block)
             .zip(s.chunks_exact(block))
             .zip(&rot)
+            .enumerate()
+            .map(|(m, blocks)| (m * block, blocks))
         {
             let Some(([rt, rl], pairs)) = rows.split_first_chunk_mut::<2>() else {
                 continue;
@@ -212,9 +216,14 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
             *rt = [T::ZERO; N];
             *rl = [T::ZERO; N];
             let spairs = srows.get(2..).unwrap_or(&[]);
-            for (pair, spair) in pairs.chunks_exact_mut(2).zip(spairs.chunks_exact(2)) {
+            let rows = pairs.chunks_exact_mut(2).zip(spairs.chunks_exact(2));
+            for ((pair, spair), a) in rows.zip((first + 2..).step_by(2)) {
+                let from = a & !3;
                 if let ([ra, rb], [sa, sb]) = (pair, spair) {
-                    for (((pa, pb), &va), &vb) in ra.iter_mut().zip(rb.iter_mut()).zip(sa).zip(sb) {
+                    let dst = ra.iter_mut().skip(from).zip(rb.iter_mut().skip(from));
+                    for ((pa, pb), (&va, &vb)) in
+                        dst.zip(from_on(sa, from).iter().zip(from_on(sb, from)))
+                    {
                         (*pa, *pb) = rotate(r, va, vb);
                     }
                 }
@@ -230,8 +239,14 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
                 }
             }
         }
-        // The deviations of the θ and λ columns' sigma points, rows 2t
-        // (plus) and 2t + 1 (minus).
+        // S is used; its factorisation checks that P is positive definite
+        // (P is reset when the step is refused), and its rows then hold the
+        // deviations of the θ and λ columns' sigma points, rows 2t (plus)
+        // and 2t + 1 (minus), each written whole.
+        if !self.amplitudes_definite(&mut s) {
+            return false;
+        }
+        let dev = &mut s;
         let g = w.spread;
         let mut delta = [T::ZERO; N];
         for (t, (l, pm)) in cols
@@ -322,9 +337,6 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
             // time, each mode's sum added in turn; then a last odd mode.
             let quads = dev.get(..4 * m_n).unwrap_or(&[]);
             let f = |d: &[T; N]| w.wi * get(d, i);
-            fn from_on<T>(d: &[T], from: usize) -> &[T] {
-                d.get(from..).unwrap_or(&[])
-            }
             let mut pairs = quads.chunks_exact(8);
             for octet in &mut pairs {
                 let [d0, d1, d2, d3, e0, e1, e2, e3] = octet else {
@@ -366,48 +378,62 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
             *xi = fi + di;
         }
         self.add_process_noise(state);
-        self.amplitudes_definite(&mut s)
+        true
     }
 
     /// True if the amplitude block of `s` (symmetric, zero on the θ and λ
     /// columns of its amplitude rows) is positive definite: its Cholesky
     /// factorisation in place, on and above the diagonal, every pivot
-    /// usable.
+    /// usable. The amplitudes come in pairs (a, a + 1), and so are taken:
+    /// the pair's two pivots in turn, then each later pair of rows less
+    /// both products at once, `(v - l_i l_j) - m_i m_j`, the numbers of
+    /// one pivot after the other with half the loads and stores. Rows are
+    /// updated from the multiple of 4 at or below the diagonal; what lies
+    /// before is never read.
     #[inline(always)]
     fn amplitudes_definite(&self, s: &mut [[T; N]; N]) -> bool {
-        // Row t scaled, from t + 1 on; what lies before is left from the
-        // pivots before and meets only entries below the diagonal (rows
-        // are updated from the multiple of 4 below it), which are never
-        // read.
-        let mut l = [T::ZERO; N];
-        for t in 0..N {
-            if !self.is_amplitude(t) {
-                continue;
-            }
-            let Some((top, below)) = s.split_at_mut_checked(t + 1) else {
-                continue;
+        let k_n = 2 * self.m_n();
+        for q in 0..N.saturating_sub(k_n) / 2 {
+            let a = self.pivot(k_n + 2 * q);
+            let Some((top, below)) = s.split_at_mut_checked(a + 2) else {
+                return false;
             };
-            let Some(rt) = top.last() else { continue };
-            let d = get(rt, t);
+            let Some([ra, rb]) = top.last_chunk_mut::<2>() else {
+                return false;
+            };
+            let d = get(ra, a);
             if !pivot_ok(d) {
                 return false;
             }
             let r = rsqrt(d);
-            let tail = l.get_mut(t + 1..).unwrap_or(&mut []);
-            for (lj, &v) in tail.iter_mut().zip(rt.get(t + 1..).unwrap_or(&[])) {
+            let mut l = [T::ZERO; N];
+            for (lj, &v) in l.iter_mut().zip(ra.iter()) {
                 *lj = v * r;
             }
-            for (row, i) in below.iter_mut().zip(t + 1..) {
-                if !self.is_amplitude(i) {
-                    continue;
-                }
-                let li = get(&l, i);
-                let from = i & !3;
-                let (Some(row), Some(l)) = (row.get_mut(from..), l.get(from..)) else {
+            let lb = get(&l, a + 1);
+            for (v, &lj) in rb.iter_mut().zip(&l) {
+                *v -= lb * lj;
+            }
+            let d = get(rb, a + 1);
+            if !pivot_ok(d) {
+                return false;
+            }
+            let r = rsqrt(d);
+            let mut m = [T::ZERO; N];
+            for (mj, &v) in m.iter_mut().zip(rb.iter()) {
+                *mj = v * r;
+            }
+            for (rows, i) in below.chunks_exact_mut(2).zip((a + 2..).step_by(2)) {
+                let ([ri, rj], true) = (rows, self.is_amplitude(i)) else {
                     continue;
                 };
-                for (v, &lj) in row.iter_mut().zip(l) {
-                    *v -= li * lj;
+                let from = i & !3;
+                let (li, lj, mi, mj) = (get(&l, i), get(&l, i + 1), get(&m, i), get(&m, i + 1));
+                let cols = from_on(&l, from).iter().zip(from_on(&m, from));
+                let rows = ri.iter_mut().skip(from).zip(rj.iter_mut().skip(from));
+                for ((vi, vj), (&lc, &mc)) in rows.zip(cols) {
+                    *vi = (*vi - li * lc) - mi * mc;
+                    *vj = (*vj - lj * lc) - mj * mc;
                 }
             }
         }
@@ -603,7 +629,9 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// eliminated before; written to `cols[t]`. The amplitude pivots are not
     /// eliminated: an innovation needs only `S Hᵀ`, which these columns
     /// give, and the prediction checks S once per step
-    /// ([`Self::amplitudes_definite`]). False if a pivot is not usable.
+    /// ([`Self::amplitudes_definite`]). Each entry is P's less the same
+    /// products in the same order as in the right-looking elimination of
+    /// these pivots, so the same numbers. False if a pivot is not usable.
     #[inline(always)]
     fn leading_columns(&self, p: &[[T; N]; N], cols: &mut [[T; N]; N]) -> bool {
         for t in 0..2 * self.m_n() {
@@ -615,20 +643,45 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
             let Some(col) = rest.first_mut() else {
                 return false;
             };
-            *col = row(p, pt);
+            // P's row less each column before in turn, times 1/√d: the
+            // pivot d first, so that the copy of the row and the scaling
+            // ride on the first and last passes.
+            let mut d = entry(p, pt, pt);
             for l in before.iter() {
                 let f = get(l, pt);
-                for (c, &li) in col.iter_mut().zip(l) {
-                    *c -= li * f;
-                }
+                d -= f * f;
             }
-            let d = get(col, pt);
             if !pivot_ok(d) {
                 return false;
             }
             let r = rsqrt(d);
-            for c in col.iter_mut() {
-                *c *= r;
+            let Some(prow) = p.get(pt) else {
+                return false;
+            };
+            let mut ls = before.iter().map(|l| (l, get(l, pt)));
+            if let Some((first, f0)) = ls.next() {
+                let last = ls.next_back();
+                for ((c, &v), &li) in col.iter_mut().zip(prow).zip(first) {
+                    *c = v - li * f0;
+                }
+                for (l, f) in ls {
+                    for (c, &li) in col.iter_mut().zip(l) {
+                        *c -= li * f;
+                    }
+                }
+                if let Some((l, f)) = last {
+                    for (c, &li) in col.iter_mut().zip(l) {
+                        *c = (*c - li * f) * r;
+                    }
+                } else {
+                    for c in col.iter_mut() {
+                        *c *= r;
+                    }
+                }
+            } else {
+                for (c, &v) in col.iter_mut().zip(prow) {
+                    *c = v * r;
+                }
             }
             put(col, pt, d * r);
             for s in 0..t {
@@ -691,6 +744,12 @@ fn factor_natural<T: Real, const N: usize>(
         }
     }
     true
+}
+
+/// The entries of `d` from index `from` on.
+#[inline(always)]
+fn from_on<T>(d: &[T], from: usize) -> &[T] {
+    d.get(from..).unwrap_or(&[])
 }
 
 /// A usable pivot: positive (and normal, for [`rsqrt`]) and below GUARD
