@@ -540,7 +540,7 @@ fn join(
     let elf = elfs.get("m4f");
     row.code_bytes = sum_bytes(m4f.iter().map(|l| {
         let f = l.as_ref()?.function?;
-        elf?.function_size(f)
+        elf?.code_size(f)
     }));
     let either = |i: usize| {
         m4f.get(i)

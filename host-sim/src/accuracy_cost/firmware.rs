@@ -8,7 +8,7 @@
 //! cannot be read is an error naming its file, line number and text. Other
 //! lines (comments, QEMU or cargo chatter) are skipped.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use object::elf;
 use object::read::elf::{ElfFile32, SectionHeader, Sym};
@@ -479,6 +479,8 @@ pub struct Elf {
     pub sections: Vec<Section>,
     /// Every `STT_FUNC` symbol of `.symtab`.
     pub functions: Vec<Function>,
+    /// The bytes of each executable section, with its address.
+    pub code: Vec<(u64, Vec<u8>)>,
 }
 
 impl Elf {
@@ -492,8 +494,14 @@ impl Elf {
         let file = ElfFile32::<object::Endianness>::parse(bytes).map_err(bad)?;
         let endian = file.endian();
         let mut sections = Vec::new();
+        let mut code = Vec::new();
         for s in file.sections() {
             let header = s.elf_section_header();
+            if header.sh_flags(endian).0 & elf::SHF_EXECINSTR.0 != 0
+                && header.sh_type(endian) != elf::SHT_NOBITS
+            {
+                code.push((s.address(), s.data().map_err(bad)?.to_vec()));
+            }
             sections.push(Section {
                 name: String::from_utf8_lossy(s.name_bytes().map_err(bad)?).into_owned(),
                 kind: header.sh_type(endian).0,
@@ -514,7 +522,67 @@ impl Elf {
         Ok(Self {
             sections,
             functions,
+            code,
         })
+    }
+
+    /// Code size of the function at `addr` with every function it reaches
+    /// by calls (`BL`) and tail calls (`B.W` to a function's start),
+    /// followed to the end and each counted once: what a firmware links
+    /// for that call. Calls through a register are not followed.
+    pub fn code_size(&self, addr: u64) -> Option<u64> {
+        let start = addr & !1;
+        self.function_size(start)?;
+        let mut seen = BTreeSet::new();
+        let mut todo = vec![start];
+        let mut total = 0;
+        while let Some(f) = todo.pop() {
+            if !seen.insert(f) {
+                continue;
+            }
+            let Some(size) = self.function_size(f) else {
+                continue;
+            };
+            total += size;
+            todo.extend(self.callees(f, size).filter(|t| !seen.contains(t)));
+        }
+        Some(total)
+    }
+
+    /// The function starts that the `BL` and `B.W` instructions of
+    /// `[addr, addr + size)` jump to, decoded as Thumb-2 from the start.
+    fn callees(&self, addr: u64, size: u64) -> impl Iterator<Item = u64> + '_ {
+        let bytes = self
+            .code
+            .iter()
+            .find_map(|(at, bytes)| {
+                let from = usize::try_from(addr.checked_sub(*at)?).ok()?;
+                let to = from.checked_add(usize::try_from(size).ok()?)?;
+                bytes.get(from..to)
+            })
+            .unwrap_or(&[]);
+        let half = |o: usize| {
+            bytes
+                .get(o..o + 2)
+                .map(|h| u16::from_le_bytes([h[0], h[1]]))
+        };
+        let mut targets = Vec::new();
+        let mut o = 0;
+        while let Some(first) = half(o) {
+            // 32-bit encodings start with 0b11101, 0b11110 or 0b11111.
+            if first >> 11 < 0b11101 {
+                o += 2;
+                continue;
+            }
+            if let Some(t) = half(o + 2).and_then(|second| thumb_branch(first, second)) {
+                let at = addr.wrapping_add(o as u64 + 4);
+                targets.push(at.wrapping_add_signed(t));
+            }
+            o += 4;
+        }
+        targets
+            .into_iter()
+            .filter(|&t| self.function_size(t).is_some())
     }
 
     /// Code size of the function at `addr` (Thumb bit ignored): the
@@ -559,6 +627,25 @@ impl Elf {
     }
 }
 
+/// The offset of a Thumb-2 `BL` (T1) or `B.W` (T4) from the instruction's
+/// address plus 4; `None` for any other instruction.
+fn thumb_branch(first: u16, second: u16) -> Option<i64> {
+    let link_or_wide = second & 0xd000;
+    if first & 0xf800 != 0xf000 || (link_or_wide != 0xd000 && link_or_wide != 0x9000) {
+        return None;
+    }
+    let bit = |v: u16, n: u32| i64::from((v >> n) & 1);
+    let s = bit(first, 10);
+    let (i1, i2) = (1 - (bit(second, 13) ^ s), 1 - (bit(second, 11) ^ s));
+    let imm = (s << 24)
+        | (i1 << 23)
+        | (i2 << 22)
+        | (i64::from(first & 0x3ff) << 12)
+        | (i64::from(second & 0x7ff) << 1);
+    // Sign-extended from 25 bits.
+    Some((imm << 39) >> 39)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -567,6 +654,11 @@ mod tests {
     /// .bss (0x10, NOBITS), .symtab (two functions, one object), .strtab
     /// and .shstrtab.
     pub(crate) fn tiny_elf() -> Vec<u8> {
+        tiny_elf_with(vec![0u8; 0x40])
+    }
+
+    /// [`tiny_elf`] with these 0x40 bytes of `.text`.
+    fn tiny_elf_with(text: Vec<u8>) -> Vec<u8> {
         let shstr = b"\0.text\0.bss\0.symtab\0.strtab\0.shstrtab\0";
         let name = |s: &str| {
             let hay = std::str::from_utf8(shstr).unwrap_or("");
@@ -580,7 +672,6 @@ mod tests {
             sym.extend_from_slice(&size.to_le_bytes());
             sym.extend_from_slice(&[info, 0, 1, 0]);
         }
-        let text = vec![0u8; 0x40];
         let strtab = b"\0f\0".to_vec();
         let mut body = Vec::new();
         let mut place = |bytes: &[u8]| {
@@ -669,6 +760,66 @@ mod tests {
         assert_eq!(elf.function_size(0x420), Some(0x1c));
         assert_eq!(elf.function_size(0), None);
         assert_eq!(elf.function_size(0x999), None);
+    }
+
+    /// A Thumb-2 `BL` (or, `link` false, `B.W`) at `from` to `to`.
+    fn branch(from: u64, to: u64, link: bool) -> [u8; 4] {
+        let offset = to.wrapping_sub(from + 4) as i64;
+        let bit = |n: u32| ((offset >> n) & 1) as u16;
+        let s = bit(24);
+        let (j1, j2) = ((1 - bit(23)) ^ s, (1 - bit(22)) ^ s);
+        let first = 0xf000 | (s << 10) | ((offset >> 12) as u16 & 0x3ff);
+        let second = if link { 0xd000 } else { 0x9000 }
+            | (j1 << 13)
+            | (j2 << 11)
+            | ((offset >> 1) as u16 & 0x7ff);
+        let [a, b] = first.to_le_bytes();
+        let [c, d] = second.to_le_bytes();
+        [a, b, c, d]
+    }
+
+    #[test]
+    fn thumb_branches_decode() {
+        for (from, to) in [
+            (0x7fc, 0xb330),
+            (0xb330, 0x7fc),
+            (0x1000, 0x1000),
+            (0, 0xff_fffe),
+        ] {
+            for link in [true, false] {
+                let [a, b, c, d] = branch(from, to, link);
+                let got = thumb_branch(u16::from_le_bytes([a, b]), u16::from_le_bytes([c, d]));
+                assert_eq!(
+                    got,
+                    Some(to as i64 - from as i64 - 4),
+                    "{from:#x} -> {to:#x}"
+                );
+            }
+        }
+        // A conditional branch (T3), a 16-bit and a data-processing
+        // instruction are no calls.
+        assert_eq!(thumb_branch(0xf000, 0x8000), None);
+        assert_eq!(thumb_branch(0xbf00, 0xd000), None);
+        assert_eq!(thumb_branch(0xeb00, 0xd000), None);
+    }
+
+    #[test]
+    fn code_size_follows_calls_and_tail_calls_once() {
+        // f (0x400, 0x20 bytes) calls g (0x420, 0x1c bytes) after a 16-bit
+        // instruction; g jumps back to f's start (a cycle) and to the
+        // middle of f (no function start, not followed).
+        let mut text = vec![0u8; 0x40];
+        text[2..6].copy_from_slice(&branch(0x402, 0x420, true));
+        text[0x20..0x24].copy_from_slice(&branch(0x420, 0x400, false));
+        text[0x24..0x28].copy_from_slice(&branch(0x424, 0x410, true));
+        let elf = Elf::parse(&tiny_elf_with(text), "calls").unwrap();
+        assert_eq!(elf.function_size(0x401), Some(0x20));
+        assert_eq!(elf.code_size(0x401), Some(0x20 + 0x1c));
+        assert_eq!(elf.code_size(0x420), Some(0x20 + 0x1c));
+        assert_eq!(elf.code_size(0x999), None);
+        // Without the calls, each function alone.
+        let elf = Elf::parse(&tiny_elf(), "tiny").unwrap();
+        assert_eq!(elf.code_size(0x400), Some(0x20));
     }
 
     #[test]

@@ -672,7 +672,9 @@ pub(super) fn markdown(
          - **host ns**: ns per call on this machine, median of {} runs of {} calls (a timing loop,\n  \
            not a benchmark harness: `cargo bench -p bushing-sim --bench kernels` runs divan).\n\
          - **host instr**: host instructions per call under valgrind's callgrind{}.\n\
-         - **code B**: size of the measured non-inlined function in the M4F firmware's symbol table;\n  \
+         - **code B**: size of the measured non-inlined function in the M4F firmware's symbol table\n  \
+           with every function it calls (`BL`, and `B.W` to a function's start, followed to the end,\n  \
+           each counted once, the runtime's `memcpy` and `memset` included);\n  \
            **state B / params B**: `size_of` the state and of the parameters, as the firmware prints.\n\
          - **front**: on its family's Pareto front of error against M4F cycles (no cheaper\n  \
            configuration of the family is as accurate).\n",
@@ -1043,7 +1045,7 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
     for (key, (a, b, c)) in grouped {
         let code = a.and_then(|l| {
             let f = l.function?;
-            elfs.get(&l.target)?.function_size(f)
+            elfs.get(&l.target)?.code_size(f)
         });
         let any = a.or(b);
         let fields = [

@@ -49,9 +49,25 @@ pub(super) fn set_row<T, const N: usize>(p: &mut [[T; N]; N], i: usize, r: [T; N
     }
 }
 
-/// Copies the entries above the diagonal to those below it.
+/// Copies the entries above the diagonal to those below it. From 8 states
+/// on out of line: the call is small against the copy, and the copy's
+/// code (its registers) then does not depend on the step around it.
 #[inline(always)]
 pub(super) fn mirror_upper<T: Copy, const N: usize>(p: &mut [[T; N]; N]) {
+    if N >= 8 {
+        mirror_out_of_line(p);
+    } else {
+        mirror(p);
+    }
+}
+
+#[inline(never)]
+fn mirror_out_of_line<T: Copy, const N: usize>(p: &mut [[T; N]; N]) {
+    mirror(p);
+}
+
+#[inline(always)]
+fn mirror<T: Copy, const N: usize>(p: &mut [[T; N]; N]) {
     for i in 1..N {
         let Some((top, bottom)) = p.split_at_mut_checked(i) else {
             continue;

@@ -631,13 +631,18 @@ fn check_filters<const N: usize>(modes: usize, sensors: usize) {
             }
         }
 
-        // Not positive definite: refused.
-        let mut bad = core.clone();
-        let (ai, bi) = tr.pair(modes - 1, sensors - 1);
-        bad.p[ai][bi] = 2.0 * (bad.p[ai][ai] * bad.p[bi][bi]).sqrt();
-        bad.p[bi][ai] = bad.p[ai][bi];
-        let mut anchor = [[f64::NAN; 4]; N];
-        assert!(!tr.predict_ukf(&mut bad, &mut anchor, &mut ukf::Scratch::new()));
+        // Not positive definite: refused, whether the amplitude block
+        // fails within the last pair, within the first or only through
+        // the coupling of the first pair to the last.
+        let (first, last) = (tr.pair(0, 0), tr.pair(modes - 1, sensors - 1));
+        for (i, j) in [(last.0, last.1), (first.0, first.1), (first.1, last.0)] {
+            let mut bad = core.clone();
+            bad.p[i][j] = 2.0 * (bad.p[i][i] * bad.p[j][j]).sqrt();
+            bad.p[j][i] = bad.p[i][j];
+            let mut anchor = [[f64::NAN; 4]; N];
+            let refused = !tr.predict_ukf(&mut bad, &mut anchor, &mut ukf::Scratch::new());
+            assert!(refused, "{N} states, entry ({i}, {j})");
+        }
     }
 }
 

@@ -8,9 +8,10 @@ use super::{Core, ModalTracker};
 use crate::real::Real;
 use crate::tracker::fast::{min_positive, rsqrt};
 
-/// Working array of a UKF step, zeroed once per step and written before
-/// it is read: the factor's θ and λ columns (one row each), shared by the
-/// prediction and every innovation.
+/// Working array of a UKF step from 8 states on, zeroed once per step and
+/// written before it is read: the factor's θ and λ columns (one row each),
+/// shared by the prediction and every innovation. Below 8 states the step
+/// keeps its two columns in registers and the array is optimised away.
 pub(super) struct Scratch<T, const N: usize> {
     cols: [[T; N]; N],
 }
@@ -45,9 +46,9 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
         if N >= 8 {
             return self.predict_ukf_blocks(state, anchor, scratch);
         }
-        let cols = &mut scratch.cols;
+        let mut cols = [[T::ZERO; N]; 2];
         let mut schur = [[T::ZERO; N]; N];
-        if !factor_natural(&state.p, cols, &mut schur) {
+        if !factor_natural(&state.p, &mut cols, &mut schur) {
             return false;
         }
         let (m_n, k_n) = (self.m_n(), 2 * self.m_n());
@@ -157,15 +158,15 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
         let cols = &mut scratch.cols;
         // The θ and λ columns of the factor, then S on the amplitude rows:
         // `P - Σ_t l_t l_tᵀ`, subtracted in the order of t, each row from
-        // the multiple of 4 at or below the diagonal (what lies before is
-        // never read); then zero on the θ and λ columns of those rows.
+        // the diagonal of its amplitude pair's first row (what lies before
+        // is never read); then zero on the θ and λ columns of those rows.
         if !self.leading_columns(&state.p, cols) {
             return false;
         }
         let mut s = state.p;
         let leading = cols.get(..k_n).unwrap_or(&[]);
         for (i, row) in s.iter_mut().enumerate() {
-            let from = i & !3;
+            let from = i & !1;
             let (true, Some(row)) = (self.is_amplitude(i), row.get_mut(from..)) else {
                 continue;
             };
@@ -199,10 +200,9 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
         let mut f0 = x;
         let rot = self.rotate_blocks(&mut f0, anchor);
         let p = &mut state.p;
-        // R S Rᵀ: the pair rows of S turned (θ and λ rows zero), each from
-        // the multiple of 4 at or below the diagonal (what lies before is
-        // replaced by the mirror), then the pair columns on and above the
-        // diagonal.
+        // R S Rᵀ: the pair rows of S turned (θ and λ rows zero), both from
+        // the first one's diagonal (what lies before is replaced by the
+        // mirror), then the pair columns on and above the diagonal.
         for (first, ((rows, srows), &r)) in p
             .chunks_exact_mut(block)
             .zip(s.chunks_exact(block))
@@ -218,7 +218,7 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
             let spairs = srows.get(2..).unwrap_or(&[]);
             let rows = pairs.chunks_exact_mut(2).zip(spairs.chunks_exact(2));
             for ((pair, spair), a) in rows.zip((first + 2..).step_by(2)) {
-                let from = a & !3;
+                let from = a;
                 if let ([ra, rb], [sa, sb]) = (pair, spair) {
                     let dst = ra.iter_mut().skip(from).zip(rb.iter_mut().skip(from));
                     for ((pa, pb), (&va, &vb)) in
@@ -324,52 +324,45 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
                 *v -= w.shift * dj;
             }
         }
-        // The sigma points' products on and above the diagonal, mirrored.
-        // Each row from the multiple of 4 at or below the diagonal (the
-        // entries below it are replaced by the mirror), so that the
-        // unrolled loops have no remainder when 4 divides N.
-        for (i, row) in p.iter_mut().enumerate() {
-            let from = i & !3;
-            let Some(row) = row.get_mut(from..) else {
+        // The sigma points' products on and above the diagonal, mirrored:
+        // two rows at a time, both from the first one's diagonal (the
+        // entries below it are replaced by the mirror), so that each
+        // deviation entry loaded serves both.
+        let quads = dev.get(..4 * m_n).unwrap_or(&[]);
+        for (i, rows) in p.chunks_exact_mut(2).enumerate().map(|(h, r)| (2 * h, r)) {
+            let from = i;
+            let [r0, r1] = rows else { continue };
+            let (Some(r0), Some(r1)) = (r0.get_mut(from..), r1.get_mut(from..)) else {
                 continue;
             };
+            let f = |d: &[T; N]| (w.wi * get(d, i), w.wi * get(d, i + 1));
+            let tail = |d| from_on(d, from).iter();
             // Two modes' four deviations (θ and λ, plus and minus) at a
             // time, each mode's sum added in turn; then a last odd mode.
-            let quads = dev.get(..4 * m_n).unwrap_or(&[]);
-            let f = |d: &[T; N]| w.wi * get(d, i);
             let mut pairs = quads.chunks_exact(8);
             for octet in &mut pairs {
                 let [d0, d1, d2, d3, e0, e1, e2, e3] = octet else {
                     continue;
                 };
-                let (k0, k1, k2, k3) = (f(d0), f(d1), f(d2), f(d3));
-                let (g0, g1, g2, g3) = (f(e0), f(e1), f(e2), f(e3));
-                let ds = from_on(d0, from)
-                    .iter()
-                    .zip(from_on(d1, from))
-                    .zip(from_on(d2, from))
-                    .zip(from_on(d3, from));
-                let es = from_on(e0, from)
-                    .iter()
-                    .zip(from_on(e1, from))
-                    .zip(from_on(e2, from))
-                    .zip(from_on(e3, from));
-                for ((v, (((&a, &b), &c), &d)), (((&p, &q), &r), &u)) in
-                    row.iter_mut().zip(ds).zip(es)
+                let ((k0, h0), (k1, h1), (k2, h2), (k3, h3)) = (f(d0), f(d1), f(d2), f(d3));
+                let ((g0, j0), (g1, j1), (g2, j2), (g3, j3)) = (f(e0), f(e1), f(e2), f(e3));
+                let ds = tail(d0).zip(tail(d1)).zip(tail(d2)).zip(tail(d3));
+                let es = tail(e0).zip(tail(e1)).zip(tail(e2)).zip(tail(e3));
+                for (((v0, v1), (((&a, &b), &c), &d)), (((&p, &q), &r), &u)) in
+                    r0.iter_mut().zip(r1.iter_mut()).zip(ds).zip(es)
                 {
-                    *v = (*v + (k0 * a + k1 * b + k2 * c + k3 * d))
+                    *v0 = (*v0 + (k0 * a + k1 * b + k2 * c + k3 * d))
                         + (g0 * p + g1 * q + g2 * r + g3 * u);
+                    *v1 = (*v1 + (h0 * a + h1 * b + h2 * c + h3 * d))
+                        + (j0 * p + j1 * q + j2 * r + j3 * u);
                 }
             }
             if let [d0, d1, d2, d3] = pairs.remainder() {
-                let (k0, k1, k2, k3) = (f(d0), f(d1), f(d2), f(d3));
-                let ds = from_on(d0, from)
-                    .iter()
-                    .zip(from_on(d1, from))
-                    .zip(from_on(d2, from))
-                    .zip(from_on(d3, from));
-                for (v, (((&a, &b), &c), &d)) in row.iter_mut().zip(ds) {
-                    *v += k0 * a + k1 * b + k2 * c + k3 * d;
+                let ((k0, h0), (k1, h1), (k2, h2), (k3, h3)) = (f(d0), f(d1), f(d2), f(d3));
+                let ds = tail(d0).zip(tail(d1)).zip(tail(d2)).zip(tail(d3));
+                for ((v0, v1), (((&a, &b), &c), &d)) in r0.iter_mut().zip(r1.iter_mut()).zip(ds) {
+                    *v0 += k0 * a + k1 * b + k2 * c + k3 * d;
+                    *v1 += h0 * a + h1 * b + h2 * c + h3 * d;
                 }
             }
         }
@@ -385,15 +378,17 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// columns of its amplitude rows) is positive definite: its Cholesky
     /// factorisation in place, on and above the diagonal, every pivot
     /// usable. The amplitudes come in pairs (a, a + 1), and so are taken:
-    /// the pair's two pivots in turn, then each later pair of rows less
-    /// both products at once, `(v - l_i l_j) - m_i m_j`, the numbers of
-    /// one pivot after the other with half the loads and stores. Rows are
-    /// updated from the multiple of 4 at or below the diagonal; what lies
-    /// before is never read.
+    /// the pair's two pivots in turn, its rows scaled into the factor's
+    /// l and m, then each later pair of rows less both products at once,
+    /// `(v - l_i l_j) - m_i m_j`, the numbers of one pivot after the other
+    /// with half the loads and stores. The last pair needs only its
+    /// pivots. Rows are updated from the multiple of 4 at or below the
+    /// diagonal; what lies before it is not used.
     #[inline(always)]
     fn amplitudes_definite(&self, s: &mut [[T; N]; N]) -> bool {
         let k_n = 2 * self.m_n();
-        for q in 0..N.saturating_sub(k_n) / 2 {
+        let pairs = N.saturating_sub(k_n) / 2;
+        for q in 0..pairs {
             let a = self.pivot(k_n + 2 * q);
             let Some((top, below)) = s.split_at_mut_checked(a + 2) else {
                 return false;
@@ -406,32 +401,39 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
                 return false;
             }
             let r = rsqrt(d);
-            let mut l = [T::ZERO; N];
-            for (lj, &v) in l.iter_mut().zip(ra.iter()) {
-                *lj = v * r;
+            let lb = get(ra, a + 1) * r;
+            if q + 1 == pairs {
+                return pivot_ok(get(rb, a + 1) - lb * lb);
             }
-            let lb = get(&l, a + 1);
-            for (v, &lj) in rb.iter_mut().zip(&l) {
-                *v -= lb * lj;
+            let from = a & !3;
+            let (Some(ta), Some(tb)) = (ra.get_mut(from..), rb.get_mut(from..)) else {
+                return false;
+            };
+            for (va, vb) in ta.iter_mut().zip(tb.iter_mut()) {
+                let l = *va * r;
+                *va = l;
+                *vb -= lb * l;
             }
-            let d = get(rb, a + 1);
+            let d = get(tb, a + 1 - from);
             if !pivot_ok(d) {
                 return false;
             }
             let r = rsqrt(d);
-            let mut m = [T::ZERO; N];
-            for (mj, &v) in m.iter_mut().zip(rb.iter()) {
-                *mj = v * r;
+            for v in tb.iter_mut() {
+                *v *= r;
             }
+            let (l, m) = (&*ra, &*rb);
             for (rows, i) in below.chunks_exact_mut(2).zip((a + 2..).step_by(2)) {
                 let ([ri, rj], true) = (rows, self.is_amplitude(i)) else {
                     continue;
                 };
                 let from = i & !3;
-                let (li, lj, mi, mj) = (get(&l, i), get(&l, i + 1), get(&m, i), get(&m, i + 1));
-                let cols = from_on(&l, from).iter().zip(from_on(&m, from));
-                let rows = ri.iter_mut().skip(from).zip(rj.iter_mut().skip(from));
-                for ((vi, vj), (&lc, &mc)) in rows.zip(cols) {
+                let (li, lj, mi, mj) = (get(l, i), get(l, i + 1), get(m, i), get(m, i + 1));
+                let cols = from_on(l, from).iter().zip(from_on(m, from));
+                let (Some(ri), Some(rj)) = (ri.get_mut(from..), rj.get_mut(from..)) else {
+                    continue;
+                };
+                for ((vi, vj), (&lc, &mc)) in ri.iter_mut().zip(rj.iter_mut()).zip(cols) {
                     *vi = (*vi - li * lc) - mi * mc;
                     *vj = (*vj - lj * lc) - mj * mc;
                 }
@@ -504,16 +506,17 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
         v: &mut [T; N],
         scratch: &mut Scratch<T, N>,
     ) -> Option<(T, T)> {
-        let cols = &mut scratch.cols;
-        // The amplitude covariance given θ and λ, formed below 8 states.
-        let schur = if N < 8 {
+        // The θ and λ columns, and the amplitude covariance given θ and λ
+        // below 8 states (where the scratch is not used).
+        let mut natural = [[T::ZERO; N]; 2];
+        let (schur, cols): (_, &[[T; N]]) = if N < 8 {
             let mut schur = [[T::ZERO; N]; N];
-            if !factor_natural(&state.p, cols, &mut schur) {
+            if !factor_natural(&state.p, &mut natural, &mut schur) {
                 return None;
             }
-            Some(schur)
-        } else if self.leading_columns(&state.p, cols) {
-            None
+            (Some(schur), &natural)
+        } else if self.leading_columns(&state.p, &mut scratch.cols) {
+            (None, &scratch.cols)
         } else {
             return None;
         };
@@ -634,58 +637,60 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// these pivots, so the same numbers. False if a pivot is not usable.
     #[inline(always)]
     fn leading_columns(&self, p: &[[T; N]; N], cols: &mut [[T; N]; N]) -> bool {
-        for t in 0..2 * self.m_n() {
-            let pt = self.pivot(t);
-            // Column t built in place, from the columns before it.
-            let Some((before, rest)) = cols.split_at_mut_checked(t) else {
+        // A mode's θ and λ columns at once: the two pivots, and the θ
+        // column's entry at λ, first (scalars), then both columns in one
+        // pass, each entry P's less the columns before in turn, times
+        // 1/√d (the λ column less the θ column last).
+        for m in 0..self.m_n() {
+            let (ti, li) = (self.pivot(2 * m), self.pivot(2 * m + 1));
+            let Some((before, rest)) = cols.split_at_mut_checked(2 * m) else {
                 return false;
             };
-            let Some(col) = rest.first_mut() else {
+            let (Some([ct, cl]), Some(pt), Some(pl)) =
+                (rest.first_chunk_mut::<2>(), p.get(ti), p.get(li))
+            else {
                 return false;
             };
-            // P's row less each column before in turn, times 1/√d: the
-            // pivot d first, so that the copy of the row and the scaling
-            // ride on the first and last passes.
-            let mut d = entry(p, pt, pt);
+            let (mut dt, mut e, mut dl) = (get(pt, ti), get(pt, li), get(pl, li));
             for l in before.iter() {
-                let f = get(l, pt);
-                d -= f * f;
+                let (ft, fl) = (get(l, ti), get(l, li));
+                dt -= ft * ft;
+                e -= fl * ft;
+                dl -= fl * fl;
             }
-            if !pivot_ok(d) {
+            if !pivot_ok(dt) {
                 return false;
             }
-            let r = rsqrt(d);
-            let Some(prow) = p.get(pt) else {
+            let rt = rsqrt(dt);
+            let e = e * rt;
+            dl -= e * e;
+            if !pivot_ok(dl) {
                 return false;
-            };
-            let mut ls = before.iter().map(|l| (l, get(l, pt)));
-            if let Some((first, f0)) = ls.next() {
-                let last = ls.next_back();
-                for ((c, &v), &li) in col.iter_mut().zip(prow).zip(first) {
-                    *c = v - li * f0;
-                }
-                for (l, f) in ls {
-                    for (c, &li) in col.iter_mut().zip(l) {
-                        *c -= li * f;
-                    }
-                }
-                if let Some((l, f)) = last {
-                    for (c, &li) in col.iter_mut().zip(l) {
-                        *c = (*c - li * f) * r;
-                    }
-                } else {
-                    for c in col.iter_mut() {
-                        *c *= r;
-                    }
-                }
-            } else {
-                for (c, &v) in col.iter_mut().zip(prow) {
-                    *c = v * r;
-                }
             }
-            put(col, pt, d * r);
-            for s in 0..t {
-                put(col, self.pivot(s), T::ZERO);
+            let rl = rsqrt(dl);
+            for (j, ((vt, vl), (&at, &al))) in ct
+                .iter_mut()
+                .zip(cl.iter_mut())
+                .zip(pt.iter().zip(pl))
+                .enumerate()
+            {
+                let (mut a, mut b) = (at, al);
+                for l in before.iter() {
+                    let v = get(l, j);
+                    a -= v * get(l, ti);
+                    b -= v * get(l, li);
+                }
+                let a = a * rt;
+                *vt = a;
+                *vl = (b - a * e) * rl;
+            }
+            put(ct, ti, dt * rt);
+            put(cl, li, dl * rl);
+            put(cl, ti, T::ZERO);
+            for s in 0..2 * m {
+                let q = self.pivot(s);
+                put(ct, q, T::ZERO);
+                put(cl, q, T::ZERO);
             }
         }
         true
@@ -703,7 +708,7 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
 #[inline(always)]
 fn factor_natural<T: Real, const N: usize>(
     p: &[[T; N]; N],
-    cols: &mut [[T; N]; N],
+    cols: &mut [[T; N]; 2],
     schur: &mut [[T; N]; N],
 ) -> bool {
     let mut w = *p;
