@@ -95,12 +95,16 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
         let Core { x, p, .. } = state;
         let rot = self.rotate_blocks(x, anchor);
         // Rows: a pair's rows of F P from its own rows and its mode's θ and
-        // λ rows.
-        for ((rows, xm), &r) in p
+        // λ rows, on the columns read below: from its mode's θ on, and the
+        // θ and λ columns of the modes before (the entries of their pair
+        // columns lie below the diagonal and are replaced by the mirror).
+        for (m, ((rows, xm), &r)) in p
             .chunks_exact_mut(block)
             .zip(x.chunks_exact(block))
             .zip(&rot)
+            .enumerate()
         {
+            let first = m * block;
             let Some(([rt, rl], pairs)) = rows.split_first_chunk_mut::<2>() else {
                 continue;
             };
@@ -108,12 +112,28 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
                 .chunks_exact_mut(2)
                 .zip(xm.get(2..).unwrap_or(&[]).chunks_exact(2))
             {
-                if let ([ra, rb], [a1, b1]) = (pair, xp) {
-                    for (((pa, pb), &pt), &pl) in
-                        ra.iter_mut().zip(rb.iter_mut()).zip(&*rt).zip(&*rl)
-                    {
-                        (*pa, *pb) = transition(r, *a1, *b1, *pa, *pb, pt, pl);
+                let ([ra, rb], &[a1, b1]) = (pair, xp) else {
+                    continue;
+                };
+                for m2 in 0..m {
+                    let (t2, l2) = self.theta_lambda(m2);
+                    for j in [t2, l2] {
+                        let (pt, pl) = (get(rt, j), get(rl, j));
+                        let (na, nb) = transition(r, a1, b1, get(ra, j), get(rb, j), pt, pl);
+                        put(ra, j, na);
+                        put(rb, j, nb);
                     }
+                }
+                let (Some(ra), Some(rb), Some(rt), Some(rl)) = (
+                    ra.get_mut(first..),
+                    rb.get_mut(first..),
+                    rt.get(first..),
+                    rl.get(first..),
+                ) else {
+                    continue;
+                };
+                for (((pa, pb), &pt), &pl) in ra.iter_mut().zip(rb.iter_mut()).zip(rt).zip(rl) {
+                    (*pa, *pb) = transition(r, a1, b1, *pa, *pb, pt, pl);
                 }
             }
         }

@@ -217,8 +217,7 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
             *rl = [T::ZERO; N];
             let spairs = srows.get(2..).unwrap_or(&[]);
             let rows = pairs.chunks_exact_mut(2).zip(spairs.chunks_exact(2));
-            for ((pair, spair), a) in rows.zip((first + 2..).step_by(2)) {
-                let from = a;
+            for ((pair, spair), from) in rows.zip((first + 2..).step_by(2)) {
                 if let ([ra, rb], [sa, sb]) = (pair, spair) {
                     let dst = ra.iter_mut().skip(from).zip(rb.iter_mut().skip(from));
                     for ((pa, pb), (&va, &vb)) in
@@ -330,13 +329,12 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
         // deviation entry loaded serves both.
         let quads = dev.get(..4 * m_n).unwrap_or(&[]);
         for (i, rows) in p.chunks_exact_mut(2).enumerate().map(|(h, r)| (2 * h, r)) {
-            let from = i;
             let [r0, r1] = rows else { continue };
-            let (Some(r0), Some(r1)) = (r0.get_mut(from..), r1.get_mut(from..)) else {
+            let (Some(r0), Some(r1)) = (r0.get_mut(i..), r1.get_mut(i..)) else {
                 continue;
             };
             let f = |d: &[T; N]| (w.wi * get(d, i), w.wi * get(d, i + 1));
-            let tail = |d| from_on(d, from).iter();
+            let tail = |d| from_on(d, i).iter();
             // Two modes' four deviations (θ and λ, plus and minus) at a
             // time, each mode's sum added in turn; then a last odd mode.
             let mut pairs = quads.chunks_exact(8);
