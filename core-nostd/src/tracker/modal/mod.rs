@@ -82,9 +82,9 @@
 //!   on Cortex-M4F, worst of three inputs (QEMU, f32; `cargo run -q -p
 //!   bushing-boards --release --target thumbv7em-none-eabihf --bin
 //!   kernel-cost`, family `tracker`): one mode and one accelerometer
-//!   (4 states) EKF 427, UKF 1 078; two modes and three accelerometers
-//!   (16 states) with `M = 2` EKF 11 093, UKF 35 408, and with the mode
-//!   count given at run time EKF 14 322, UKF 41 170. Estimated cycles in
+//!   (4 states) EKF 424, UKF 1 092; two modes and three accelerometers
+//!   (16 states) with `M = 2` EKF 9 948, UKF 26 310, and with the mode
+//!   count given at run time EKF 14 353, UKF 37 643. Estimated cycles in
 //!   `docs/accuracy-cost.md`.
 
 // The parts: the public inputs and outputs (`types`), construction
@@ -449,7 +449,12 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// mode's, mode block by mode block.
     #[inline(always)]
     fn rotate_blocks(&self, x: &mut [T; N], anchor: &mut [[T; 4]; N]) -> [(T, T); N] {
-        let mut rot = [(T::ZERO, T::ZERO); N];
+        // Written and read for the modes only. A zero the optimiser does
+        // not see as a constant: the array is then zeroed by stores inline
+        // rather than by a call of `memset` (a word per few instructions on
+        // a Cortex-M).
+        let zero = core::hint::black_box(T::ZERO);
+        let mut rot = [(zero, zero); N];
         for ((r, a), xm) in rot
             .iter_mut()
             .zip(anchor.iter_mut())
@@ -562,6 +567,8 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
         } else {
             self.predict_ekf(state, anchor);
         }
+        // Every innovation writes the whole of v before the update reads it.
+        let mut v = [T::ZERO; N];
         for c in 0..self.c_n() {
             let z = samples.get(c).copied().unwrap_or(T::ZERO);
             if !z.is_finite() {
@@ -570,7 +577,6 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
                 continue;
             }
             let z = z * get(&self.meas_gain, c);
-            let mut v = [T::ZERO; N];
             let Some((zhat, s)) = self.innovation::<UKF>(state, c, &mut v, &mut scratch) else {
                 return (report, false);
             };
