@@ -82,9 +82,9 @@
 //!   on Cortex-M4F, worst of three inputs (QEMU, f32; `cargo run -q -p
 //!   bushing-boards --release --target thumbv7em-none-eabihf --bin
 //!   kernel-cost`, family `tracker`): one mode and one accelerometer
-//!   (4 states) EKF 424, UKF 1 092; two modes and three accelerometers
+//!   (4 states) EKF 426, UKF 1 085; two modes and three accelerometers
 //!   (16 states) with `M = 2` EKF 9 948, UKF 26 310, and with the mode
-//!   count given at run time EKF 14 353, UKF 37 643. Estimated cycles in
+//!   count given at run time EKF 14 303, UKF 37 635. Estimated cycles in
 //!   `docs/accuracy-cost.md`.
 
 // The parts: the public inputs and outputs (`types`), construction

@@ -110,11 +110,15 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     fn loosen(&self, state: &mut Core<T, N>, i: usize) {
         let p0 = get(&self.p0, i);
         if entry(&state.p, i, i) < p0 {
-            // The whole row and column, the diagonal set last. A zero the
-            // optimiser does not see as a constant: the row's stores then
-            // stay inline rather than becoming a call of `memset` (a word
-            // per few instructions on a Cortex-M).
-            let zero = core::hint::black_box(T::ZERO);
+            // The whole row and column, the diagonal set last. From 8
+            // states on, a zero the optimiser does not see as a constant:
+            // the row's stores then stay inline rather than becoming a call
+            // of `memset` (a word per few instructions on a Cortex-M).
+            let zero = if N >= 8 {
+                core::hint::black_box(T::ZERO)
+            } else {
+                T::ZERO
+            };
             if let Some(row) = state.p.get_mut(i) {
                 for v in row.iter_mut() {
                     *v = zero;
