@@ -90,6 +90,14 @@ pub(super) fn set<T, const N: usize>(p: &mut [[T; N]; N], i: usize, j: usize, va
     }
 }
 
+/// A zero the optimiser does not see as a constant. Stores of it stay
+/// inline; a run of stores of a constant zero becomes a call of `memset`,
+/// which stores a word per few instructions on a Cortex-M.
+#[inline(always)]
+pub(super) fn opaque_zero<T: Real>() -> T {
+    core::hint::black_box(T::ZERO)
+}
+
 #[inline(always)]
 pub(super) fn add_diag<T: Real, const N: usize>(p: &mut [[T; N]; N], i: usize, q: T) {
     if let Some(v) = p.get_mut(i).and_then(|r| r.get_mut(i)) {

@@ -108,7 +108,7 @@ use crate::real::Real;
 
 use crate::tracker::fast::{min_positive, rsqrt};
 use construct::powk;
-use matrix::{add_diag, entry, get, put, set};
+use matrix::{add_diag, entry, get, opaque_zero, put, set};
 use rotation::{anchor_at, rotate};
 use safety::{all_finite, cold};
 
@@ -449,11 +449,8 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// mode's, mode block by mode block.
     #[inline(always)]
     fn rotate_blocks(&self, x: &mut [T; N], anchor: &mut [[T; 4]; N]) -> [(T, T); N] {
-        // Written and read for the modes only. A zero the optimiser does
-        // not see as a constant: the array is then zeroed by stores inline
-        // rather than by a call of `memset` (a word per few instructions on
-        // a Cortex-M).
-        let zero = core::hint::black_box(T::ZERO);
+        // Written and read for the modes only; zeroed by stores inline.
+        let zero = opaque_zero::<T>();
         let mut rot = [(zero, zero); N];
         for ((r, a), xm) in rot
             .iter_mut()

@@ -2,7 +2,7 @@
 //! the covariance floor, fading, loosening, and the finiteness check
 //! behind the undo.
 
-use super::matrix::{entry, get, put, set};
+use super::matrix::{entry, get, opaque_zero, put, set};
 use super::{Core, Measured, ModalTracker};
 use crate::real::Real;
 use crate::tracker::fast::clamp;
@@ -111,14 +111,9 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
         let p0 = get(&self.p0, i);
         if entry(&state.p, i, i) < p0 {
             // The whole row and column, the diagonal set last. From 8
-            // states on, a zero the optimiser does not see as a constant:
-            // the row's stores then stay inline rather than becoming a call
-            // of `memset` (a word per few instructions on a Cortex-M).
-            let zero = if N >= 8 {
-                core::hint::black_box(T::ZERO)
-            } else {
-                T::ZERO
-            };
+            // states on the row's stores stay inline with an opaque zero
+            // (below, the loop is unrolled with the plain one).
+            let zero = if N >= 8 { opaque_zero() } else { T::ZERO };
             if let Some(row) = state.p.get_mut(i) {
                 for v in row.iter_mut() {
                     *v = zero;
