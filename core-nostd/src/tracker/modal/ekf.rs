@@ -16,8 +16,8 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
     /// (F P)[pair][θ or λ]` needs no second pass. From 8 on, in place and
     /// by mode blocks (the layout is `[θ, λ, a₀, b₀, a₁, b₁, …]` per mode):
     /// the pair rows of F P, then the pair columns of (F P) Fᵀ on and above
-    /// the diagonal, then the θ and λ rows' entries above it from the pair
-    /// rows below; the transforms read the θ and λ rows or columns, which
+    /// the diagonal on the pair rows, then the θ and λ rows' entries above
+    /// it from the pair rows below; the transforms read the θ and λ rows or columns, which
     /// they leave alone. The result is mirrored, so exactly symmetric.
     #[inline(always)]
     pub(super) fn predict_ekf(&self, state: &mut Core<T, N>, anchor: &mut [[T; 4]; N]) {
@@ -147,24 +147,32 @@ impl<T: Real, const N: usize, const M: usize> ModalTracker<T, N, M> {
             }
         }
         // Columns of (F P) Fᵀ, a pair of columns at a time, on and above
-        // the diagonal: one short loop down the rows (the θ and λ rows'
-        // entries are then replaced below).
+        // the diagonal, on the pair rows only: the θ and λ rows' entries
+        // are set below.
         for (m2, &r) in rot.iter().enumerate().take(self.m_n()) {
             let (tj, _) = self.theta_lambda(m2);
             for c2 in 0..self.c_n() {
                 let (aj, bj) = self.pair(m2, c2);
                 let (a1, b1) = (get(x, aj), get(x, bj));
-                for row in p.iter_mut().take(bj + 1) {
+                let turn = |row: &mut [T; N]| {
                     // The mode's columns from θ to this pair: θ, λ first,
                     // the pair last.
                     let seg = row.get_mut(tj..=bj).unwrap_or(&mut []);
                     let Some((&mut [vt, vl], rest)) = seg.split_first_chunk_mut::<2>() else {
-                        continue;
+                        return;
                     };
                     let Some((_, [va, vb])) = rest.split_last_chunk_mut::<2>() else {
-                        continue;
+                        return;
                     };
                     (*va, *vb) = transition(r, a1, b1, *va, *vb, vt, vl);
+                };
+                // Two rows a time, a pair's, down to this pair; a mode's
+                // first two rows are its θ and λ (`block` is at least 2).
+                let rows = p.get_mut(..=bj).unwrap_or(&mut []);
+                for (k, pair) in rows.chunks_exact_mut(2).enumerate() {
+                    if (2 * k) % block != 0 {
+                        pair.iter_mut().for_each(turn);
+                    }
                 }
             }
         }
