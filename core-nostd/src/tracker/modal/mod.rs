@@ -83,8 +83,8 @@
 //!   bushing-boards --release --target thumbv7em-none-eabihf --bin
 //!   kernel-cost`, family `tracker`): one mode and one accelerometer
 //!   (4 states) EKF 426, UKF 1 085; two modes and three accelerometers
-//!   (16 states) with `M = 2` EKF 9 948, UKF 26 310, and with the mode
-//!   count given at run time EKF 14 303, UKF 37 635. Estimated cycles in
+//!   (16 states) with `M = 2` EKF 9 488, UKF 26 315, and with the mode
+//!   count given at run time EKF 14 166, UKF 37 628. Estimated cycles in
 //!   `docs/accuracy-cost.md`.
 
 // The parts: the public inputs and outputs (`types`), construction
