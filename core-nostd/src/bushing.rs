@@ -605,10 +605,16 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
         // force and the total tangent stay finite and within the guard.
         let accept = |r: &E::Report| {
             let t = E::total(r);
-            // The magnitude is a sum of magnitudes: no sign to strip.
-            (E::magnitude(r) <= T::GUARD)
-                & within(elastic + t.force)
-                & within(elastic_tangent + t.tangent)
+            // The magnitude is a sum of magnitudes: no sign to strip. One
+            // comparison of the sum of the three, which is at least each
+            // of them (rounding is monotone), and the three only when it
+            // fails.
+            let (m, f, k) = (
+                E::magnitude(r),
+                elastic + t.force,
+                elastic_tangent + t.tangent,
+            );
+            m + f.abs() + k.abs() <= T::GUARD || ((m <= T::GUARD) & within(f) & within(k))
         };
         let Some(report) = self.effects.step_if(&mut state.effects, &drive, accept) else {
             return refuse(state, self.g0, Faults::FORCE_OUT_OF_RANGE);
@@ -657,7 +663,9 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
 /// dissipated energy 0/0) and within the guard.
 #[inline(always)]
 fn within_guard<T: Real>(f: T, k: T) -> bool {
-    f.abs() <= T::GUARD && k > T::ZERO && k <= T::GUARD
+    // With k positive, one comparison of |f| + k bounds both (rounding is
+    // monotone); the two one by one only when it fails.
+    k > T::ZERO && (f.abs() + k <= T::GUARD || (f.abs() <= T::GUARD && k <= T::GUARD))
 }
 
 /// Flags a step whose dissipated energy left the working type; it counts

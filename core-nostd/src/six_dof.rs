@@ -344,8 +344,17 @@ impl<T: Real> Kinematics<T> {
     /// terms) is then within the guard as well, so that no product of two
     /// of them, nor a force of the axes times an arm, overflows. NaN fails.
     fn usable(&self) -> bool {
-        self.rotations && self.positions && self.strain.iter().all(|x| x.abs() <= T::GUARD)
+        self.rotations && self.positions && within_all(self.strain.iter(), T::GUARD)
     }
+}
+
+/// Every value within `bound` in magnitude (a NaN fails): one comparison of
+/// the sum of the magnitudes, which is at least each of them (rounding is
+/// monotone), and the values one by one only when it fails.
+#[inline(always)]
+fn within_all<'a, T: Real + 'a>(values: impl Iterator<Item = &'a T> + Clone, bound: T) -> bool {
+    let sum = values.clone().fold(T::ZERO, |acc, x| acc + x.abs());
+    sum <= bound || values.into_iter().all(|x| x.abs() <= bound)
 }
 
 /// The positions and orientations of both nodes are finite.
@@ -455,14 +464,10 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
         let (q1, q2) = (node1.orientation, node2.orientation);
         // |q|² within 1e-3 of one: a rotation (NaN fails).
         let tolerance = T::from_f64(1e-3);
-        let unit = |q: Quat<T>| (q.w * q.w + dot(q.v, q.v) - T::ONE).abs() <= tolerance;
-        let rotations = unit(q1) && unit(q2);
+        let off = |q: Quat<T>| q.w * q.w + dot(q.v, q.v) - T::ONE;
+        let rotations = within_all([off(q1), off(q2)].iter(), tolerance);
         let quarter = T::GUARD * T::HALF * T::HALF;
-        let positions = node1
-            .position
-            .iter()
-            .chain(&node2.position)
-            .all(|x| x.abs() <= quarter);
+        let positions = within_all(node1.position.iter().chain(&node2.position), quarter);
         // Relative rotation, node-1 components; the shortest arc.
         let mut q = q1.conj_mul(q2);
         if q.w < T::ZERO {
