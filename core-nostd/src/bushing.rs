@@ -605,16 +605,11 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
         // force and the total tangent stay finite and within the guard.
         let accept = |r: &E::Report| {
             let t = E::total(r);
-            // The magnitude is a sum of magnitudes: no sign to strip. One
-            // comparison of the sum of the three, which is at least each
-            // of them (rounding is monotone), and the three only when it
-            // fails.
-            let (m, f, k) = (
+            within_guard3(
                 E::magnitude(r),
                 elastic + t.force,
                 elastic_tangent + t.tangent,
-            );
-            m + f.abs() + k.abs() <= T::GUARD || ((m <= T::GUARD) & within(f) & within(k))
+            )
         };
         let Some(report) = self.effects.step_if(&mut state.effects, &drive, accept) else {
             return refuse(state, self.g0, Faults::FORCE_OUT_OF_RANGE);
@@ -668,6 +663,16 @@ fn within_guard<T: Real>(f: T, k: T) -> bool {
     k > T::ZERO && (f.abs() + k <= T::GUARD || (f.abs() <= T::GUARD && k <= T::GUARD))
 }
 
+/// The effects' magnitude `m` (a sum of magnitudes: no sign to strip), a
+/// force `f` and a tangent `k` all within the guard (a NaN fails): one
+/// comparison of the sum of the three, which is at least each of them
+/// (rounding and saturation are monotone), and the three one by one only
+/// when it fails.
+#[inline(always)]
+fn within_guard3<T: Real>(m: T, f: T, k: T) -> bool {
+    m + f.abs() + k.abs() <= T::GUARD || ((m <= T::GUARD) & within(f) & within(k))
+}
+
 /// Flags a step whose dissipated energy left the working type; it counts
 /// as zero.
 #[cold]
@@ -704,6 +709,39 @@ mod tests {
 
     fn cubic() -> Polynomial<f64, 4> {
         Polynomial::new(&[1.0, 100.0, 0.0, 2.0], (-5.0, 5.0)).unwrap()
+    }
+
+    #[test]
+    fn the_guard_checks_decide_as_their_comparisons_one_by_one() {
+        // `within_guard` and `within_guard3` compare a sum first: they
+        // must take and refuse exactly what the comparisons one by one do.
+        let g = <f32 as Real>::GUARD;
+        let values = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.6 * g,
+            -0.6 * g,
+            g,
+            -g,
+            g * 1.000_001,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        for &f in &values {
+            for &k in &values {
+                let plain = f.abs() <= g && k > 0.0 && k <= g;
+                assert_eq!(within_guard(f, k), plain, "f {f}, k {k}");
+                // The effects' check: a magnitude is not negative.
+                for &m in values.iter().filter(|m| m.is_nan() || **m >= 0.0) {
+                    let plain = m <= g && f.abs() <= g && k.abs() <= g;
+                    assert_eq!(within_guard3(m, f, k), plain, "m {m}, f {f}, k {k}");
+                }
+            }
+        }
     }
 
     #[test]

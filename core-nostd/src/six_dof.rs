@@ -69,8 +69,8 @@
 //! square root; |v|² below the smallest normal number takes θ = 2v), and
 //! the checks of the configuration: two unit quaternions, two positions
 //! and six local strains. One engine mount (six axes of a polynomial, 2
-//! Maxwell and 3 Jenkins cells) costs 1 662 guest instructions per step on
-//! a Cortex-M4F attached and 1 765 invariant, net of the call, on its
+//! Maxwell and 3 Jenkins cells) costs 1 583 guest instructions per step on
+//! a Cortex-M4F attached and 1 688 invariant, net of the call, on its
 //! worst input, band-limited noise (`docs/accuracy-cost.md`, family
 //! `six-dof`). The tangent is formed on request, not in the step.
 
