@@ -12,7 +12,7 @@
 
 use crate::backbone::Backbone;
 use crate::error::{Faults, Param, ParamError, positive_in};
-use crate::real::{Exponentials, Real};
+use crate::real::{Exponentials, Real, all_within};
 
 /// What every effect sees in a step: the new displacement and the backbone
 /// evaluated there, with the increments since the last accepted step.
@@ -605,10 +605,11 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
         // force and the total tangent stay finite and within the guard.
         let accept = |r: &E::Report| {
             let t = E::total(r);
-            within_guard3(
-                E::magnitude(r),
-                elastic + t.force,
-                elastic_tangent + t.tangent,
+            // The magnitude is a sum of magnitudes: no sign to strip.
+            all_within(
+                &[E::magnitude(r)],
+                &[elastic + t.force, elastic_tangent + t.tangent],
+                T::GUARD,
             )
         };
         let Some(report) = self.effects.step_if(&mut state.effects, &drive, accept) else {
@@ -658,19 +659,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
 /// dissipated energy 0/0) and within the guard.
 #[inline(always)]
 fn within_guard<T: Real>(f: T, k: T) -> bool {
-    // With k positive, one comparison of |f| + k bounds both (rounding is
-    // monotone); the two one by one only when it fails.
-    k > T::ZERO && (f.abs() + k <= T::GUARD || (f.abs() <= T::GUARD && k <= T::GUARD))
-}
-
-/// The effects' magnitude `m` (a sum of magnitudes: no sign to strip), a
-/// force `f` and a tangent `k` all within the guard (a NaN fails): one
-/// comparison of the sum of the three, which is at least each of them
-/// (rounding and saturation are monotone), and the three one by one only
-/// when it fails.
-#[inline(always)]
-fn within_guard3<T: Real>(m: T, f: T, k: T) -> bool {
-    m + f.abs() + k.abs() <= T::GUARD || ((m <= T::GUARD) & within(f) & within(k))
+    k > T::ZERO && all_within(&[k], &[f], T::GUARD)
 }
 
 /// Flags a step whose dissipated energy left the working type; it counts
@@ -712,9 +701,9 @@ mod tests {
     }
 
     #[test]
-    fn the_guard_checks_decide_as_their_comparisons_one_by_one() {
-        // `within_guard` and `within_guard3` compare a sum first: they
-        // must take and refuse exactly what the comparisons one by one do.
+    fn the_backbone_guard_check_decides_as_its_three_comparisons() {
+        // `within_guard` compares |f| + k first (`all_within`): it must
+        // take and refuse exactly what the three comparisons do.
         let g = <f32 as Real>::GUARD;
         let values = [
             0.0,
@@ -735,11 +724,6 @@ mod tests {
             for &k in &values {
                 let plain = f.abs() <= g && k > 0.0 && k <= g;
                 assert_eq!(within_guard(f, k), plain, "f {f}, k {k}");
-                // The effects' check: a magnitude is not negative.
-                for &m in values.iter().filter(|m| m.is_nan() || **m >= 0.0) {
-                    let plain = m <= g && f.abs() <= g && k.abs() <= g;
-                    assert_eq!(within_guard3(m, f, k), plain, "m {m}, f {f}, k {k}");
-                }
             }
         }
     }

@@ -212,7 +212,7 @@ impl Exponent {
 ///   constraints). First order in ξ: accuracy needs ξ ≪ w_u / A.
 /// - **Cost**: n = 1: no iteration, one evaluation of f and two
 ///   divisions. n = 2: no iteration, one division and one `rsqrt` (Newton
-///   steps, no libm), the slope from the same root; about 189 guest
+///   steps, no libm), the slope from the same root; about 188 guest
 ///   instructions a step for a whole bushing on a Cortex-M4F
 ///   (`docs/accuracy-cost.md`, `friction`, `bouc-wen/n-2`). The step
 ///   dispatches once on the exponent, so each closed form runs its own

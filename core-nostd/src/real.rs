@@ -17,6 +17,23 @@ pub(crate) fn clamp<T: PartialOrd>(v: T, lo: T, hi: T) -> T {
     }
 }
 
+/// Every magnitude (values known not to be negative: no sign to strip) and
+/// every value within `bound` in magnitude (a NaN fails). In floating
+/// point, one comparison of the sum of them all, which is at least each of
+/// them (rounding is monotone), and each one only when it fails (beyond the
+/// bound, overflowed or NaN): the same answer in fewer compares. A
+/// fixed-point type compares them one by one, where a saturating add costs
+/// more than a compare.
+#[inline(always)]
+pub(crate) fn all_within<T: Real>(magnitudes: &[T], values: &[T], bound: T) -> bool {
+    let each = || magnitudes.iter().all(|m| *m <= bound) && values.iter().all(|x| x.abs() <= bound);
+    if !(is_f32::<T>() || is_f64::<T>()) {
+        return each();
+    }
+    let sum = magnitudes.iter().fold(T::ZERO, |acc, m| acc + *m);
+    values.iter().fold(sum, |acc, x| acc + x.abs()) <= bound || each()
+}
+
 /// True when `T` is `f32` (by size and epsilon, known at compile time).
 #[inline(always)]
 pub fn is_f32<T: Real>() -> bool {
@@ -317,6 +334,59 @@ impl Exponentials<f32> for MicromathExp {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `all_within` against the comparisons one by one, over every triple of
+    /// `values` (0, -0, at and beyond the bound, sums beyond it or
+    /// overflowing, the largest finite value, infinities, NaN).
+    fn all_within_as_one_by_one<T: Real>(values: &[T], bound: T) {
+        for &a in values {
+            for &b in values {
+                for &c in values {
+                    let v = [a, b, c];
+                    let plain = v.iter().all(|x| x.abs() <= bound);
+                    assert_eq!(all_within(&[], &v, bound), plain, "{v:?} against {bound:?}");
+                    // The first as a magnitude, when it is one.
+                    if a.partial_cmp(&T::ZERO) != Some(core::cmp::Ordering::Less) {
+                        let got = all_within(&[a], &[b, c], bound);
+                        assert_eq!(got, plain, "{v:?} against {bound:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_sum_of_magnitudes_decides_as_the_values_one_by_one() {
+        let f = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.6,
+            1.0,
+            -1.0,
+            1.000_001,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        all_within_as_one_by_one::<f32>(&f, 1.0);
+        all_within_as_one_by_one::<f32>(&f, f32::MAX);
+        all_within_as_one_by_one::<f32>(&f, <f32 as Real>::GUARD);
+        let d = f.map(f64::from);
+        all_within_as_one_by_one::<f64>(&d, 1.0);
+        all_within_as_one_by_one::<f64>(&d, f64::MAX);
+        #[cfg(feature = "fixed")]
+        {
+            use crate::fixed::Q16;
+            let q = [
+                0.0, 0.5, -0.6, 1.0, -1.0, 1.001, 16_384.0, 32_767.0, -32_768.0,
+            ];
+            let q = q.map(Q16::from_f64);
+            all_within_as_one_by_one::<Q16>(&q, Q16::ONE);
+            all_within_as_one_by_one::<Q16>(&q, Q16::GUARD);
+        }
+    }
 
     #[cfg(feature = "micromath")]
     #[test]

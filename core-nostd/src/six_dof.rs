@@ -77,7 +77,7 @@
 use crate::backbone::Backbone;
 use crate::bushing::{Bushing, BushingState, Effect};
 use crate::error::{Faults, Param, ParamError, in_range};
-use crate::real::{Real, min_positive, rsqrt};
+use crate::real::{Real, all_within, min_positive, rsqrt};
 
 /// A vector of three components.
 pub type Vec3<T> = [T; 3];
@@ -344,17 +344,8 @@ impl<T: Real> Kinematics<T> {
     /// terms) is then within the guard as well, so that no product of two
     /// of them, nor a force of the axes times an arm, overflows. NaN fails.
     fn usable(&self) -> bool {
-        self.rotations && self.positions && within_all(self.strain.iter(), T::GUARD)
+        self.rotations && self.positions && all_within(&[], &self.strain, T::GUARD)
     }
-}
-
-/// Every value within `bound` in magnitude (a NaN fails): one comparison of
-/// the sum of the magnitudes, which is at least each of them (rounding is
-/// monotone), and the values one by one only when it fails.
-#[inline(always)]
-fn within_all<'a, T: Real + 'a>(values: impl Iterator<Item = &'a T> + Clone, bound: T) -> bool {
-    let sum = values.clone().fold(T::ZERO, |acc, x| acc + x.abs());
-    sum <= bound || values.into_iter().all(|x| x.abs() <= bound)
 }
 
 /// The positions and orientations of both nodes are finite.
@@ -465,9 +456,10 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
         // |q|² within 1e-3 of one: a rotation (NaN fails).
         let tolerance = T::from_f64(1e-3);
         let off = |q: Quat<T>| q.w * q.w + dot(q.v, q.v) - T::ONE;
-        let rotations = within_all([off(q1), off(q2)].iter(), tolerance);
+        let rotations = all_within(&[], &[off(q1), off(q2)], tolerance);
         let quarter = T::GUARD * T::HALF * T::HALF;
-        let positions = within_all(node1.position.iter().chain(&node2.position), quarter);
+        let ([a, b, c], [d, e, f]) = (node1.position, node2.position);
+        let positions = all_within(&[], &[a, b, c, d, e, f], quarter);
         // Relative rotation, node-1 components; the shortest arc.
         let mut q = q1.conj_mul(q2);
         if q.w < T::ZERO {

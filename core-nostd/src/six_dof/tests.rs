@@ -376,39 +376,3 @@ fn offsets_and_positions_beyond_their_share_of_the_guard_are_refused() {
     b.step(&mut s, &near1, &near2);
     assert!(s.faults().is_empty(), "{:?}", s.faults());
 }
-
-#[test]
-fn the_sum_of_magnitudes_decides_as_the_values_one_by_one() {
-    // `within_all` compares the sum of the magnitudes first: it must take
-    // and refuse exactly what the comparison of each value does, also when
-    // the sum is beyond the bound or overflows, and for NaN.
-    let bound = 1.0f32;
-    let values = [
-        0.0,
-        -0.0,
-        0.5,
-        -0.6,
-        1.0,
-        -1.0,
-        1.000_001,
-        f32::MAX,
-        f32::INFINITY,
-        f32::NEG_INFINITY,
-        f32::NAN,
-    ];
-    for &a in &values {
-        for &b in &values {
-            for &c in &values {
-                let v = [a, b, c];
-                let plain = v.iter().all(|x| x.abs() <= bound);
-                assert_eq!(within_all(v.iter(), bound), plain, "{v:?}");
-                let plain_max = v.iter().all(|x| x.abs() <= f32::MAX);
-                assert_eq!(
-                    within_all(v.iter(), f32::MAX),
-                    plain_max,
-                    "{v:?} against MAX"
-                );
-            }
-        }
-    }
-}
