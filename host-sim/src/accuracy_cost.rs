@@ -651,6 +651,7 @@ pub fn generate(inputs: &Inputs, options: &Options) -> Result<Report, Error> {
     let warnings = elf_mismatches(&lines, &elfs);
     let mut rows = families::rows(options)?;
     let mut kernels = host::kernels()?;
+    kernels.extend(host::by_input()?);
     let (ns, reference_ns) = host::time_with_reference(&mut kernels, options.timing);
     drop(kernels);
     let instr = if options.callgrind && !options.quick && callgrind::available() {

@@ -15,12 +15,14 @@
 //! Every builder returns the library's own types (nothing here wraps or
 //! changes a model): the crate only fixes the numbers (corners, fractions,
 //! slip distances, the control period [`DT`]) and the inputs ([`sine`],
-//! [`triangle`], [`drives`], [`mount_motion`]). It is `no_std`, allocates
+//! [`triangle`], [`drives`], [`mount_motion`], and the three every cost is
+//! measured on, [`input::Input`]). It is `no_std`, allocates
 //! nothing and builds for the same Cortex-M targets as the core. The
 //! features `micromath` and `fixed` only pass through to `bushing`.
 #![no_std]
 #![forbid(unsafe_code)]
 
+pub mod input;
 mod noise;
 
 pub use noise::Noise;

@@ -50,76 +50,22 @@ mod firmware {
         ShiftFactor,
     };
     use bushing_boards::probe::{self, INSTRUCTIONS_PER_TICK, Span, measure_three};
+    use bushing_kernels::input::{
+        AMPLITUDE, Input, NOISE_CORNER, NOISE_RMS, NOISE_SEED, PERIOD, SMALL,
+    };
     use bushing_kernels::{
-        DT, IwanOscillator, MountEffects, band_noise, berg, bouc_wen, composite, dahl,
-        default_bushing, drives, engine_mount, grunwald, iwan_bank, iwan_oscillator, jenkins,
-        maxwell_bank, mount_motion_scaled, mount_noise, polynomial, sine, spline, sts16, xf2,
+        DT, IwanOscillator, MountEffects, berg, bouc_wen, composite, dahl, default_bushing, drives,
+        engine_mount, grunwald, iwan_bank, iwan_oscillator, jenkins, maxwell_bank,
+        mount_motion_scaled, mount_noise, polynomial, spline, sts16, xf2,
     };
     use cortex_m_rt::entry;
     use cortex_m_semihosting::hprintln;
     use panic_semihosting as _;
 
     const STEPS: usize = 2000;
-    /// Sine input: 2 mm amplitude, 100 samples per period (20 periods).
-    const AMPLITUDE: f64 = 2.0;
-    const PERIOD: usize = 100;
-    /// The small sine: below the smallest slip displacement of every Iwan
-    /// bank measured (0.02 mm), so that no cell slips and none is skipped.
-    const SMALL: f64 = 0.01;
-    /// Band-limited noise: 1 mm RMS, two poles at 2 % of the sample rate.
-    const NOISE_RMS: f64 = 1.0;
-    const NOISE_CORNER: f64 = 0.02;
-    const NOISE_SEED: u64 = 23;
     /// The input of the kernels that take no signal (re-tuning, the WLF
     /// factor, the first-period fit): one fixed set of arguments.
     const OWN: &str = "own";
-
-    /// The inputs every displacement-driven kernel is measured on; the
-    /// report keeps the worst and names it.
-    #[derive(Debug, Clone, Copy)]
-    enum Input {
-        /// The sine of the accuracy figures: 2 mm, 100 samples a period.
-        LargeSine,
-        /// The same sine at 0.01 mm.
-        SmallSine,
-        /// Band-limited noise, 1 mm RMS.
-        Noise,
-    }
-
-    impl Input {
-        const ALL: [Self; 3] = [Self::LargeSine, Self::SmallSine, Self::Noise];
-
-        fn name(self) -> &'static str {
-            match self {
-                Self::LargeSine => "sine",
-                Self::SmallSine => "small-sine",
-                Self::Noise => "noise",
-            }
-        }
-
-        /// The input for a kernel whose nominal signal is a sine of
-        /// `amplitude` over `period` samples: that sine, the same at
-        /// `SMALL / AMPLITUDE` of it, or band-limited noise of
-        /// `NOISE_RMS / AMPLITUDE` of it, in f32.
-        fn signal(self, amplitude: f64, period: usize) -> [f32; STEPS] {
-            let scale = amplitude / AMPLITUDE;
-            match self {
-                Self::LargeSine => sine::<f32, STEPS>(amplitude, period),
-                Self::SmallSine => sine::<f32, STEPS>(SMALL * scale, period),
-                Self::Noise => {
-                    band_noise::<f32, STEPS>(NOISE_RMS * scale, NOISE_CORNER, NOISE_SEED)
-                }
-            }
-        }
-
-        fn xs<T: Real>(self) -> [T; STEPS] {
-            match self {
-                Self::LargeSine => sine::<T, STEPS>(AMPLITUDE, PERIOD),
-                Self::SmallSine => sine::<T, STEPS>(SMALL, PERIOD),
-                Self::Noise => band_noise::<T, STEPS>(NOISE_RMS, NOISE_CORNER, NOISE_SEED),
-            }
-        }
-    }
 
     /// What the measurements on one input share: the displacements and
     /// the drives the polynomial backbone gives for them.
@@ -133,7 +79,7 @@ mod firmware {
     fn on_every_input<T: Real>(mut each: impl FnMut(&Run<'_, T>)) {
         let Ok(poly) = polynomial::<T>() else { fail() };
         for input in Input::ALL {
-            let xs = input.xs::<T>();
+            let xs = input.xs::<T, STEPS>();
             let ds = drives(&poly, &xs);
             each(&Run {
                 input: input.name(),
@@ -530,7 +476,7 @@ mod firmware {
         // same at 0.005 (below the sensors' noise: the tracker fades the
         // mode), or band-limited noise; times mode-shape-like factors.
         for input in Input::ALL {
-            let xs = input.signal(1.0, 50);
+            let xs = input.signal::<STEPS>(1.0, 50);
             let shape = [1.0f32, 2.0, -1.8];
             let samples: [[f32; S]; STEPS] = core::array::from_fn(|k| {
                 let x = xs.get(k).copied().unwrap_or(0.0);
@@ -595,7 +541,7 @@ mod firmware {
     fn oscillator() {
         let Ok(osc) = iwan_oscillator() else { fail() };
         for input in Input::ALL {
-            let fs = input.signal(9.0, PERIOD);
+            let fs = input.signal::<STEPS>(9.0, PERIOD);
             let rest = || osc.state_at(0.0, 0.0, 0.0);
             let spans = measure_three(&osc, rest, &fs, oscillator_step, oscillator_empty);
             let line = Line {
@@ -686,7 +632,7 @@ mod firmware {
         // at 0.005 (below the channel's noise), or band-limited noise; the
         // force 0.9 x less 0.2 of the previous x.
         for input in Input::ALL {
-            let xs = input.signal(1.0, 50);
+            let xs = input.signal::<STEPS>(1.0, 50);
             let pairs: [(f32, f32); STEPS] = core::array::from_fn(|k| {
                 let x = xs.get(k).copied().unwrap_or(0.0);
                 let previous = k.checked_sub(1).and_then(|j| xs.get(j)).copied();

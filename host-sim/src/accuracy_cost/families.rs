@@ -42,7 +42,10 @@ pub const BACKBONE: ([f64; 4], (f64, f64)) = ([0.0, 150.0, 0.0, 4.0], (-6.0, 6.0
 /// The x_f cell of the firmware (corner 5 Hz, g = 0.1, x_f = 0.02 mm).
 pub const XF_CELL: (f64, f64, f64) = (5.0, 0.1, 0.02);
 /// The firmware's sine: amplitude (mm) and samples per period.
-pub const SINE: (f64, usize) = (2.0, 100);
+pub const SINE: (f64, usize) = (
+    bushing_kernels::input::AMPLITUDE,
+    bushing_kernels::input::PERIOD,
+);
 /// Refinement of the f64 reference step.
 pub const REFINE: usize = 64;
 /// The tracker case: f0 (Hz), damping ratio, time step (s), periods.

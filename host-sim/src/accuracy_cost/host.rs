@@ -17,6 +17,7 @@ use bushing::{
     MicromathExp, Multiplied, Plain, Real, XfBank, XfForm, XfSpec,
 };
 use bushing_kernels::DT;
+use bushing_kernels::input::Input;
 
 use super::families::{StateName, XF_CELL, maxwell_specs, type_label};
 use super::{Error, Key, refused};
@@ -202,6 +203,28 @@ fn tracker_kernels<T: Real + 'static>(out: &mut Vec<HostKernel>) -> Result<(), E
         });
     }
     Ok(())
+}
+
+/// The family of the default bushing's host timings on each input
+/// ([`by_input`]); the name is the input's.
+pub const BY_INPUT: &str = "bushing-by-input";
+
+/// The default bushing on each of the firmware's three inputs (the large
+/// sine, the small one and band-limited noise, `bushing_kernels::input`),
+/// keyed `(BY_INPUT, input, 7, "f32")`: the host bound is judged on the
+/// worst of them.
+pub fn by_input() -> Result<Vec<HostKernel>, Error> {
+    Input::ALL
+        .into_iter()
+        .map(|input| {
+            Ok(bushing_kernel(
+                Key::new(BY_INPUT, input.name(), 7, "f32"),
+                bushing_kernels::default_bushing::<f32>()
+                    .map_err(refused("the default bushing"))?,
+                input.xs::<f32, CALLS>().to_vec(),
+            ))
+        })
+        .collect()
 }
 
 /// Re-tuning the firmware's 8-cell bank, a_T from 1 upwards.

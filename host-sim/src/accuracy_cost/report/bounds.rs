@@ -4,9 +4,14 @@
 //! filter-only ratio to the best peer; and the growth of the modal
 //! tracker's cost with its number of states.
 
+use std::collections::BTreeMap;
+
+use bushing_kernels::input::Input;
+
 use super::{Lines, as_accurate, m4f, per_call, per_cell, sig};
-use crate::accuracy_cost::Goal;
 use crate::accuracy_cost::firmware::PeerLine;
+use crate::accuracy_cost::host::BY_INPUT;
+use crate::accuracy_cost::{Goal, Key};
 
 /// The tracker sizes measured for the growth: (states, name suffix).
 pub(in crate::accuracy_cost) const TRACKER_SIZES: [(usize, &str); 5] = [
@@ -189,6 +194,77 @@ fn filter_only(peers: &[&PeerLine]) -> Goal {
     }
 }
 
+/// The host bound on the default bushing: 20 ns per step where the
+/// reference kernel takes [`REFERENCE_NS`], checked as the ratio of the
+/// two in the same run.
+const HOST_BUSHING_NS: f64 = 20.0;
+
+/// ns per call of the reference kernel ([`super::host::reference_kernel`])
+/// on the development machine the host bound was set on (the median of the
+/// full report's runs there).
+const REFERENCE_NS: f64 = 16.0;
+
+/// The default bushing on the host, as a ratio to the reference kernel of
+/// the same run, on the worst of the firmware's three inputs.
+pub(in crate::accuracy_cost) fn host_goal(ns: &BTreeMap<Key, f64>, reference: Option<f64>) -> Goal {
+    let by_input: BTreeMap<String, f64> = Input::ALL
+        .iter()
+        .filter_map(|input| {
+            let key = Key::new(BY_INPUT, input.name(), 7, "f32");
+            ns.get(&key).map(|&t| (input.name().to_string(), t))
+        })
+        .collect();
+    let (measured, summary) = host_ratio(&by_input, reference);
+    let note = match (summary, reference) {
+        (Some(s), Some(r)) => format!(
+            "{s}, against the reference kernel's {r:.1} ns in the same run (Horner, degree 32, \
+             f64: `bushing_sim::accuracy_cost::host::reference_kernel`); the bound is \
+             {HOST_BUSHING_NS} ns where the reference takes {REFERENCE_NS} ns, so {:.1} ns on \
+             this machine",
+            HOST_BUSHING_NS / REFERENCE_NS * r
+        ),
+        _ => "not timed".into(),
+    };
+    Goal {
+        what: "default 1D bushing on the host, ns a step over the reference kernel's".into(),
+        limit: HOST_BUSHING_NS / REFERENCE_NS,
+        measured,
+        cycles: None,
+        note,
+    }
+}
+
+/// The worst input's ns over `reference` and a summary naming it and
+/// listing every input; none unless every input was timed.
+fn host_ratio(
+    by_input: &BTreeMap<String, f64>,
+    reference: Option<f64>,
+) -> (Option<f64>, Option<String>) {
+    let timed: Vec<(&str, f64)> = Input::ALL
+        .iter()
+        .filter_map(|i| by_input.get(i.name()).map(|&t| (i.name(), t)))
+        .collect();
+    let worst = timed
+        .iter()
+        .copied()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .filter(|_| timed.len() == Input::ALL.len());
+    let Some((input, t)) = worst else {
+        return (None, None);
+    };
+    let each: Vec<String> = timed
+        .iter()
+        .map(|(name, t)| format!("{name} {t:.1}"))
+        .collect();
+    (
+        reference.map(|r| t / r),
+        Some(format!(
+            "{t:.1} ns a step on its worst input, {input} ({})",
+            each.join(", ")
+        )),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -244,5 +320,27 @@ mod tests {
         // Without the peer's model cost there is nothing to compare.
         let g = filter_only(&refs[1..]);
         assert!(g.measured.is_none());
+    }
+
+    #[test]
+    fn the_host_bound_is_a_ratio_to_the_reference_kernel_on_the_worst_input() {
+        let key = |input: &str| Key::new(BY_INPUT, input, 7, "f32");
+        let ns = BTreeMap::from([
+            (key("sine"), 24.0),
+            (key("small-sine"), 30.0),
+            (key("noise"), 26.0),
+        ]);
+        let g = host_goal(&ns, Some(20.0));
+        assert_eq!(g.measured, Some(1.5));
+        assert_eq!(g.limit, HOST_BUSHING_NS / REFERENCE_NS);
+        assert!(g.note.contains("worst input, small-sine"), "{}", g.note);
+        // The bound in this run's ns: 20 ns scaled by the reference.
+        let here = format!("so {:.1} ns on this machine", 20.0 / REFERENCE_NS * 20.0);
+        assert!(g.note.contains(&here), "{}", g.note);
+        assert!(host_goal(&ns, None).measured.is_none());
+        assert!(!host_goal(&BTreeMap::new(), Some(20.0)).met());
+        // An input not timed is no bound met on the other two.
+        let two = BTreeMap::from([(key("sine"), 1.0), (key("noise"), 1.0)]);
+        assert!(!host_goal(&two, Some(20.0)).met());
     }
 }
