@@ -207,62 +207,44 @@ const REFERENCE_NS: f64 = 16.0;
 /// The default bushing on the host, as a ratio to the reference kernel of
 /// the same run, on the worst of the firmware's three inputs.
 pub(in crate::accuracy_cost) fn host_goal(ns: &BTreeMap<Key, f64>, reference: Option<f64>) -> Goal {
-    let by_input: BTreeMap<String, f64> = Input::ALL
+    let timed: Vec<(&str, f64)> = Input::ALL
         .iter()
         .filter_map(|input| {
             let key = Key::new(BY_INPUT, input.name(), 7, "f32");
-            ns.get(&key).map(|&t| (input.name().to_string(), t))
+            ns.get(&key).map(|&t| (input.name(), t))
         })
         .collect();
-    let (measured, summary) = host_ratio(&by_input, reference);
-    let note = match (summary, reference) {
-        (Some(s), Some(r)) => format!(
-            "{s}, against the reference kernel's {r:.1} ns in the same run (Horner, degree 32, \
-             f64: `bushing_sim::accuracy_cost::host::reference_kernel`); the bound is \
-             {HOST_BUSHING_NS} ns where the reference takes {REFERENCE_NS} ns, so {:.1} ns on \
-             this machine",
-            HOST_BUSHING_NS / REFERENCE_NS * r
-        ),
-        _ => "not timed".into(),
-    };
-    Goal {
-        what: "default 1D bushing on the host, ns a step over the reference kernel's".into(),
-        limit: HOST_BUSHING_NS / REFERENCE_NS,
-        measured,
-        cycles: None,
-        note,
-    }
-}
-
-/// The worst input's ns over `reference` and a summary naming it and
-/// listing every input; none unless every input was timed.
-fn host_ratio(
-    by_input: &BTreeMap<String, f64>,
-    reference: Option<f64>,
-) -> (Option<f64>, Option<String>) {
-    let timed: Vec<(&str, f64)> = Input::ALL
-        .iter()
-        .filter_map(|i| by_input.get(i.name()).map(|&t| (i.name(), t)))
-        .collect();
+    // No bound on fewer than the three inputs.
     let worst = timed
         .iter()
         .copied()
         .max_by(|a, b| a.1.total_cmp(&b.1))
         .filter(|_| timed.len() == Input::ALL.len());
-    let Some((input, t)) = worst else {
-        return (None, None);
+    let note = match (worst, reference) {
+        (Some((input, t)), Some(r)) => {
+            let each: Vec<String> = timed
+                .iter()
+                .map(|(name, t)| format!("{name} {t:.1}"))
+                .collect();
+            format!(
+                "{t:.1} ns a step on its worst input, {input} ({}), against the reference \
+                 kernel's {r:.1} ns in the same run (Horner, degree 32, f64: \
+                 `bushing_sim::accuracy_cost::host::reference_kernel`); the bound is \
+                 {HOST_BUSHING_NS} ns where the reference takes {REFERENCE_NS} ns, so {:.1} ns \
+                 on this machine",
+                each.join(", "),
+                HOST_BUSHING_NS / REFERENCE_NS * r
+            )
+        }
+        _ => "not timed".into(),
     };
-    let each: Vec<String> = timed
-        .iter()
-        .map(|(name, t)| format!("{name} {t:.1}"))
-        .collect();
-    (
-        reference.map(|r| t / r),
-        Some(format!(
-            "{t:.1} ns a step on its worst input, {input} ({})",
-            each.join(", ")
-        )),
-    )
+    Goal {
+        what: "default 1D bushing on the host, ns a step over the reference kernel's".into(),
+        limit: HOST_BUSHING_NS / REFERENCE_NS,
+        measured: worst.zip(reference).map(|((_, t), r)| t / r),
+        cycles: None,
+        note,
+    }
 }
 
 #[cfg(test)]
