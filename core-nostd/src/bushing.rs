@@ -574,7 +574,9 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
     /// Advances `state` to displacement `x` (mm) and returns the output.
     /// Always inlined: a control loop calls it once per period, and inlining
     /// lets the compiler drop the outputs the caller does not read (the
-    /// dissipated energy, with its division).
+    /// per-branch reports). The dissipated energy is formed in every step,
+    /// read or not: whether it is finite decides
+    /// [`Faults::ENERGY_OVERFLOW`].
     #[inline(always)]
     pub fn step(&self, state: &mut BushingState<T, E::State>, x: T) -> Output<T, E::Report> {
         // One compare refuses NaN, infinities and finite values beyond the
@@ -587,6 +589,19 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> Bushing<T, B, E> {
             };
             return refuse(state, self.g0, fault);
         }
+        self.step_within(state, x)
+    }
+
+    /// [`Bushing::step`] for a displacement already known to be within
+    /// [`Real::GUARD`] in magnitude (so not NaN): a caller that has checked
+    /// its inputs together, as the 6-DOF kinematics check their six
+    /// strains with one compare, skips the check of each.
+    #[inline(always)]
+    pub(crate) fn step_within(
+        &self,
+        state: &mut BushingState<T, E::State>,
+        x: T,
+    ) -> Output<T, E::Report> {
         let (f_inf, k_inf) = self.backbone.eval(x);
         if !within_guard(f_inf, k_inf) {
             return refuse(state, self.g0, Faults::OUT_OF_RANGE);

@@ -69,8 +69,8 @@
 //! square root; |v|² below the smallest normal number takes θ = 2v), and
 //! the checks of the configuration: two unit quaternions, two positions
 //! and six local strains. One engine mount (six axes of a polynomial, 2
-//! Maxwell and 3 Jenkins cells) costs 1 583 guest instructions per step on
-//! a Cortex-M4F attached and 1 688 invariant, net of the call, on its
+//! Maxwell and 3 Jenkins cells) costs 1 553 guest instructions per step on
+//! a Cortex-M4F attached and 1 658 invariant, net of the call, on its
 //! worst input, band-limited noise (`docs/accuracy-cost.md`, family
 //! `six-dof`). The tangent is formed on request, not in the step.
 
@@ -556,7 +556,7 @@ impl<T: Real, B: Backbone<T>, E: Effect<T>> SixDof<T, B, E> {
             .zip(local.iter_mut())
             .zip(tangent.iter_mut())
         {
-            let o = axis.step(s, x);
+            let o = axis.step_within(s, x);
             *f = o.force;
             *t = o.tangent;
             dissipated += o.dissipated;

@@ -376,3 +376,56 @@ fn offsets_and_positions_beyond_their_share_of_the_guard_are_refused() {
     b.step(&mut s, &near1, &near2);
     assert!(s.faults().is_empty(), "{:?}", s.faults());
 }
+
+#[test]
+fn a_strain_beyond_the_guard_is_refused_before_any_axis_steps() {
+    // Positions within a quarter of the guard and offsets within a
+    // sixteenth can still give a local strain beyond it: the nodes on the
+    // diagonal, node 1's x axis turned onto it and both offsets along it.
+    // The axes take the strains unchecked (`Bushing::step_within`), so the
+    // 6-DOF check must refuse the step before any of them moves.
+    let g = <f64 as Real>::GUARD;
+    let turn = libm::acos(1.0 / libm::sqrt(3.0)) / libm::sqrt(2.0);
+    let (c, o) = (0.2495 * g, 0.99 * g / 16.0);
+    let at = |c: f64, orientation| Pose {
+        position: [c; 3],
+        orientation,
+    };
+    let node1 = at(-c, Quat::from_rotation_vector([0.0, -turn, turn]));
+    let node2 = at(c, Quat::identity());
+    let b = SixDof::new(
+        anisotropic(),
+        [[-o, 0.0, 0.0], [o; 3]],
+        Connectivity::Attached,
+    )
+    .unwrap();
+    let (a0, b0) = poses(0);
+    let mut s = b.state_at(&a0, &b0);
+    let before = s.clone();
+    let out = b.step(&mut s, &node1, &node2);
+    assert_eq!(out.loads, before.loads());
+    assert!(s.faults().contains(Faults::OUT_OF_RANGE));
+    for k in 0..6 {
+        // Not even refused by the axis: its state, faults and count of
+        // refusals are as they were.
+        assert_eq!(s.axis(k), before.axis(k));
+    }
+    // The same configuration 4 % closer together (a strain of 0.99 of
+    // the guard) is the axes' to refuse: beyond their backbones' range.
+    let (node1, node2) = (
+        at(-0.96 * c, node1.orientation),
+        at(0.96 * c, node2.orientation),
+    );
+    let k = b.kinematics(&node1, &node2);
+    assert!(
+        k.strain[0] > 0.98 * g && k.strain[0] < g,
+        "{}",
+        k.strain[0] / g
+    );
+    let mut s = before.clone();
+    b.step(&mut s, &node1, &node2);
+    assert!(
+        s.axis(0)
+            .is_some_and(|a| a.faults().contains(Faults::OUT_OF_RANGE))
+    );
+}
