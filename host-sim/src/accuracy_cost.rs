@@ -221,6 +221,9 @@ pub struct Row {
     pub m4f_cycles: Option<f64>,
     /// Cortex-M3 estimated cycles per call, net of the call.
     pub m3_cycles: Option<f64>,
+    /// Cortex-M4F FPU arithmetic instructions per call, net of the call
+    /// ([`KernelLine::arithmetic`]).
+    pub m4f_arith: Option<f64>,
     /// The M4F input the cost is taken on (the worst of those measured),
     /// one name per part.
     pub m4f_input: Option<String>,
@@ -251,6 +254,7 @@ impl Row {
             m7: None,
             m4f_cycles: None,
             m3_cycles: None,
+            m4f_arith: None,
             m4f_input: None,
             code_bytes: None,
             state_bytes: None,
@@ -417,7 +421,7 @@ pub struct Report {
 }
 
 /// Columns of the CSV.
-pub const CSV_COLUMNS: [&str; 17] = [
+pub const CSV_COLUMNS: [&str; 18] = [
     "family",
     "name",
     "n",
@@ -431,6 +435,7 @@ pub const CSV_COLUMNS: [&str; 17] = [
     "m7_instr",
     "m4f_cycles",
     "m3_cycles",
+    "m4f_fpu_arith",
     "worst_input",
     "code_bytes",
     "state_bytes",
@@ -531,6 +536,7 @@ fn join(
     row.m3 = sum_all(m3.iter().map(|l| l.as_ref().map(KernelLine::instructions)));
     row.m4f_cycles = sum_all(m4f.iter().map(|l| l.as_ref().and_then(|l| l.cycles)));
     row.m3_cycles = sum_all(m3.iter().map(|l| l.as_ref().and_then(|l| l.cycles)));
+    row.m4f_arith = sum_all(m4f.iter().map(|l| l.as_ref().and_then(|l| l.arithmetic)));
     let mut inputs: Vec<&str> = m4f
         .iter()
         .filter_map(|l| l.as_ref()?.input.as_deref())

@@ -259,6 +259,9 @@ struct Op {
     writes: FpRegs,
     /// FPU registers read.
     reads: FpRegs,
+    /// FPU arithmetic: add, subtract, multiply (and accumulate), divide,
+    /// square root, absolute value, negate.
+    arithmetic: bool,
 }
 
 /// The condition suffixes of ARM mnemonics.
@@ -385,6 +388,7 @@ fn decode(mnemonic: &str, operands: &str) -> Op {
         cycles: [c, c],
         writes: 0,
         reads: regs,
+        arithmetic: false,
     };
     let words = list_words(operands);
     let mut op = match base {
@@ -467,6 +471,11 @@ fn decode(mnemonic: &str, operands: &str) -> Op {
     if writes_pc(base, operands) {
         op.kind = Kind::Branch;
     }
+    op.arithmetic = matches!(op.kind, Kind::FpMac)
+        || matches!(
+            base,
+            "vadd" | "vsub" | "vmul" | "vnmul" | "vdiv" | "vsqrt" | "vabs" | "vneg"
+        );
     // One cycle, and no result stall after them (the TRM's list leaves
     // them out), but they write their first operand.
     if matches!(base, "vabs" | "vneg") {
@@ -638,11 +647,27 @@ impl Disassembly {
         }
         Ok(total)
     }
+
+    /// FPU arithmetic instructions executed in a window (see
+    /// [`KernelLine::arithmetic`]).
+    pub fn window_arithmetic(&self, window: &Window) -> Result<u64, Error> {
+        let mut total = 0u64;
+        for b in &window.blocks {
+            let once = self
+                .block_ops(b)?
+                .iter()
+                .filter(|(_, op)| op.arithmetic)
+                .count();
+            total += once as u64 * b.execs;
+        }
+        Ok(total)
+    }
 }
 
 /// Joins a target's mix into its kernel lines: each line with windows and
 /// a call count gets estimated cycles per call ([`KernelLine::cycles`],
-/// [`KernelLine::cycles_call`]), and its instruction counts become the
+/// [`KernelLine::cycles_call`]) and, on the Cortex-M4F, its FPU arithmetic
+/// instructions ([`KernelLine::arithmetic`]); its instruction counts become the
 /// plugin's exact ones (the SysTick figures are rounded to 40
 /// instructions over the run), all to a tenth per call.
 pub fn attach(
@@ -667,6 +692,9 @@ pub fn attach(
         line.cycles_call = Some(per_call(t.0, b.0, calls));
         line.net = Some(per_call(t.1, e.1, calls));
         line.per_call = per_call(t.1, b.1, calls);
+        if core == Core::M4 {
+            line.arithmetic = Some(per_call(t.2, e.2, calls));
+        }
     }
     Ok(())
 }
@@ -708,12 +736,13 @@ fn per_call(x: f64, y: f64, calls: u64) -> f64 {
     (((x - y) / calls as f64).max(0.0) * 10.0).round() / 10.0
 }
 
-/// (estimated cycles, instructions) of a mix's windows, each computed once.
+/// (estimated cycles, instructions, FPU arithmetic instructions) of a
+/// mix's windows, each computed once.
 struct Windows<'a> {
     core: Core,
     mix: &'a Mix,
     disassembly: &'a Disassembly,
-    memo: BTreeMap<u32, (f64, f64)>,
+    memo: BTreeMap<u32, (f64, f64, f64)>,
 }
 
 impl<'a> Windows<'a> {
@@ -727,9 +756,9 @@ impl<'a> Windows<'a> {
     }
 
     /// Window `w`'s totals; none: zero.
-    fn get(&mut self, w: Option<u32>) -> Result<(f64, f64), Error> {
+    fn get(&mut self, w: Option<u32>) -> Result<(f64, f64, f64), Error> {
         let Some(w) = w else {
-            return Ok((0.0, 0.0));
+            return Ok((0.0, 0.0, 0.0));
         };
         if let Some(v) = self.memo.get(&w) {
             return Ok(*v);
@@ -738,6 +767,7 @@ impl<'a> Windows<'a> {
         let v = (
             self.disassembly.window_cycles(self.core, window)? as f64,
             window.insns as f64,
+            self.disassembly.window_arithmetic(window)? as f64,
         );
         self.memo.insert(w, v);
         Ok(v)
@@ -747,6 +777,7 @@ impl<'a> Windows<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accuracy_cost::firmware::parse_kernels;
 
     fn dis(lines: &[(u64, &str, &str)]) -> Disassembly {
         let text: String = lines
@@ -952,6 +983,51 @@ mod tests {
             Mix::parse("m", &failed),
             Err(Error::Mix { line: 4, .. })
         ));
+    }
+
+    #[test]
+    fn fpu_arithmetic_is_counted_per_execution_net_of_the_stand_in() {
+        // The kernel: a multiply, a multiply-accumulate, an absolute value,
+        // a compare, a conversion, a load, a move and the return, three of
+        // them arithmetic; the stand-in: a negation.
+        let d = dis(&[
+            (0x100, "vmul.f32", "s0, s1, s2"),
+            (0x104, "vmla.f32", "s0, s3, s4"),
+            (0x108, "vabs.f32", "s5, s0"),
+            (0x10c, "vcmp.f32", "s5, s6"),
+            (0x110, "vcvt.s32.f32", "s7, s5"),
+            (0x114, "vldr", "s8, [r0]"),
+            (0x118, "vmov", "r1, s8"),
+            (0x11c, "bx", "lr"),
+            (0x200, "vneg.f32", "s0, s0"),
+            (0x204, "bx", "lr"),
+        ]);
+        let run = |start, end, insns| Window {
+            insns: 4 * insns,
+            blocks: vec![BlockCount {
+                start,
+                end,
+                insns,
+                execs: 4,
+                taken: 4,
+            }],
+        };
+        let mix = Mix {
+            windows: vec![run(0x100, 0x120, 8), run(0x200, 0x206, 2)],
+            source_name: "m".into(),
+        };
+        assert_eq!(d.window_arithmetic(&mix.windows[0]), Ok(12));
+        assert_eq!(d.window_arithmetic(&mix.windows[1]), Ok(4));
+        let text = "kernel target=m4f type=f32 family=f name=k n=1 per_call=9 calls=4 \
+                    windows=0,1,-1";
+        let mut m4f = parse_kernels("t", text).unwrap_or_default();
+        assert!(attach(&mut m4f, "m4f", &mix, &d).is_ok());
+        // (12 - 4) / 4 calls.
+        assert_eq!(m4f.first().and_then(|l| l.arithmetic), Some(2.0));
+        // The Cortex-M3 has no FPU: no count.
+        let mut m3 = parse_kernels("t", &text.replace("m4f", "m3")).unwrap_or_default();
+        assert!(attach(&mut m3, "m3", &mix, &d).is_ok());
+        assert_eq!(m3.first().map(|l| l.arithmetic), Some(None));
     }
 
     #[test]

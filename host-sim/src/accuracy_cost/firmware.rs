@@ -135,6 +135,12 @@ pub struct KernelLine {
     pub cycles: Option<f64>,
     /// Estimated cycles per call, call included.
     pub cycles_call: Option<f64>,
+    /// FPU arithmetic instructions per call, net of the call (add,
+    /// subtract, multiply and its accumulating forms, divide, square root,
+    /// absolute value, negate), from the Cortex-M4F mix: the part of
+    /// [`KernelLine::net`] that computes rather than moves, tests or
+    /// branches.
+    pub arithmetic: Option<f64>,
     /// Every key of the line, as printed.
     pub fields: BTreeMap<String, String>,
     /// `file:line`, for messages.
@@ -339,6 +345,7 @@ fn kernel_line(rest: &str, origin: String) -> Result<KernelLine, LineProblem> {
         windows: windows(&f)?,
         cycles: None,
         cycles_call: None,
+        arithmetic: None,
         fields: f,
         origin,
     })

@@ -83,12 +83,15 @@ fn m4f<'a>(lines: &'a mut Lines, family: &str, name: &str, n: usize) -> Option<&
     lines.get("m4f", &Key::new(family, name, n, "f32"))
 }
 
-/// The estimated cycles and the worst input of a target's line, for its
-/// note.
+/// The estimated cycles, the FPU arithmetic instructions and the worst
+/// input of a target's line, for its note.
 fn cycles_note(l: &KernelLine) -> String {
-    let cycles = l
+    let mut cycles = l
         .cycles
         .map_or_else(String::new, |c| format!("; estimated {} cycles", sig(c)));
+    if let Some(a) = l.arithmetic {
+        cycles += &format!("; {} FPU arithmetic instructions", sig(a));
+    }
     match &l.input {
         Some(input) if l.by_input.len() > 1 => format!("{cycles}; worst input {input}"),
         _ => cycles,
@@ -634,7 +637,12 @@ pub(super) fn markdown(
            stall for an FPU result read by the next instruction, pipelined neighbouring loads, and a\n  \
            pipeline refill of {refill} cycles per taken branch; zero-wait-state memory assumed (the model\n  \
            and its assumptions: `bushing_sim::accuracy_cost::cycles`). Pareto fronts and the\n  \
-           cheapest-configuration tables rank by M4F cycles where the report has them.\n\
+           cheapest-configuration tables rank by M4F cycles where the report has them. The\n  \
+           bounds also give each kernel's FPU arithmetic instructions (add, subtract, multiply and\n  \
+           its accumulating forms, divide, square root, absolute value, negate), net of the call:\n  \
+           the part of its M4F instructions that computes rather than loads, stores, tests or\n  \
+           branches (the CSV's `m4f_fpu_arith` for every kernel; 0 for `f64` and fixed point,\n  \
+           which the Cortex-M4F's single-precision FPU does not compute).\n\
          - **host ns**: ns per call on this machine, median of {} runs of {} calls (a timing loop,\n  \
            not a benchmark harness: `cargo bench -p bushing-sim --bench kernels` runs divan), on\n  \
            the large sine; the host bound times the default bushing on each of the three inputs.\n\
@@ -999,6 +1007,7 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             csv_num(r.m7),
             csv_num(r.m4f_cycles),
             csv_num(r.m3_cycles),
+            csv_num(r.m4f_arith),
             r.m4f_input.clone().unwrap_or_default(),
             csv_bytes(r.code_bytes),
             csv_bytes(r.state_bytes),
@@ -1029,6 +1038,7 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             csv_num(c.map(KernelLine::instructions)),
             csv_num(a.and_then(|l| l.cycles)),
             csv_num(b.and_then(|l| l.cycles)),
+            csv_num(a.and_then(|l| l.arithmetic)),
             a.and_then(|l| l.input.clone()).unwrap_or_default(),
             csv_bytes(code),
             csv_bytes(any.and_then(|l| l.state_bytes)),
