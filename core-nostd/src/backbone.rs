@@ -305,10 +305,23 @@ impl<T: Real> Piece<T> {
 /// - States: none.
 /// - Stability: points must increase strictly in x and in F (positive
 ///   stiffness), checked at construction.
-/// - Cost: a binary search over the whole capacity (`log2 N` compares
-///   with no data-dependent loop test; spare capacity repeats the last
-///   piece) and 6 multiply-adds: 20 guest instructions more than a cubic
+/// - Cost: the search for the piece over the whole capacity (spare
+///   capacity repeats the last piece, so there is no data-dependent loop
+///   test) and 6 multiply-adds. The search halves: `log2 N` compares, the
+///   fewest instructions, 20 guest instructions more than a cubic
 ///   polynomial on a Cortex-M4F for N = 8 (`scripts/accuracy-cost.sh`).
+///   An in-order microcontroller takes about an instruction a cycle, so
+///   every bare-metal target halves. On an out-of-order host what counts
+///   is how long the step's instructions wait on each other: there, up to
+///   N = 8 the compiler turns the halving into conditional moves, each
+///   waiting on the one before, and the search counts the pieces that
+///   start at or below x instead, `N - 1` compares that do not wait on
+///   each other (the default bushing's host step 23 to 17 ns,
+///   `cargo bench -p bushing-sim --bench kernels -- default_bushing`); from
+///   16 pieces on the halving branches, the branches follow a slowly moving
+///   input, and it stays (counting made the 256-point capacity of
+///   `bushing-sim run` a third slower). Both find the same piece, so the
+///   numbers are the same.
 ///
 /// ```
 /// use bushing::{Backbone, MonotoneSpline, ParamError};
@@ -441,9 +454,22 @@ impl<T: Real, const N: usize> Backbone<T> for MonotoneSpline<T, N> {
         if x < first {
             return self.below.eval(x);
         }
-        // Largest i with x_i <= x, over the whole capacity (the pieces past
-        // `len` repeat the extension piece): log2(N) halvings, no loop test
-        // on data.
+        // Which search: see the cost in the type's doc.
+        let i = if cfg!(target_os = "none") || N > 8 {
+            self.halving(x)
+        } else {
+            self.counting(x)
+        };
+        self.pieces.get(i).map_or((T::ZERO, T::ZERO), |p| p.eval(x))
+    }
+}
+
+impl<T: Real, const N: usize> MonotoneSpline<T, N> {
+    /// The largest i with x_i <= x (0 when there is none, or x is NaN),
+    /// over the whole capacity (the pieces past `len` repeat the extension
+    /// piece): `log2 N` halvings, each compare waiting on the last.
+    #[inline(always)]
+    fn halving(&self, x: T) -> usize {
         let mut base = 0usize;
         let mut size = N;
         while size > 1 {
@@ -454,9 +480,16 @@ impl<T: Real, const N: usize> Backbone<T> for MonotoneSpline<T, N> {
             }
             size -= half;
         }
-        self.pieces
-            .get(base)
-            .map_or((T::ZERO, T::ZERO), |p| p.eval(x))
+        base
+    }
+
+    /// The number of pieces after the first that start at or below x: `N
+    /// - 1` compares independent of each other. The starts do not
+    /// decrease, so the compares that hold are the first ones and their
+    /// count is [`Self::halving`]'s index.
+    #[inline(always)]
+    fn counting(&self, x: T) -> usize {
+        self.pieces.iter().skip(1).filter(|p| p.x0 <= x).count()
     }
 }
 
@@ -609,6 +642,61 @@ mod tests {
         assert_eq!(s.eval(5.0), (f_end + k_end, k_end));
         let (f_0, k_0) = s.eval(-3.0);
         assert_eq!(s.eval(-4.0), (f_0 - k_0, k_0));
+    }
+
+    /// The two searches give the same piece for every x: at, just below
+    /// and just above each knot, between knots, beyond both ends, at the
+    /// infinities and NaN; for every number of points a capacity holds,
+    /// so with and without repeated extension pieces, and for capacities
+    /// that are not powers of two.
+    fn searches_agree<const N: usize>() {
+        for n in 2..=N {
+            let xs: [f64; N] =
+                core::array::from_fn(|i| -3.0 + 1.25 * i as f64 + 0.1 * (i * i) as f64);
+            let fs: [f64; N] = core::array::from_fn(|i| 100.0 * i as f64 + (i * i) as f64);
+            let s = MonotoneSpline::<f32, N>::new(&xs[..n], &fs[..n]).unwrap();
+            let probes = [
+                f32::NAN,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                0.0,
+                -0.0,
+                -1e9,
+                1e9,
+            ];
+            let check = |x: f32| {
+                assert_eq!(s.halving(x), s.counting(x), "{n} points of {N}, x = {x}");
+            };
+            for x in probes {
+                check(x);
+            }
+            for (i, &k) in xs.iter().take(n).enumerate() {
+                let k = k as f32;
+                for x in [k, k.next_down(), k.next_up()] {
+                    check(x);
+                }
+                if let Some(&next) = xs.get(i + 1) {
+                    check(0.5 * (k + next as f32));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn halving_and_counting_find_the_same_piece() {
+        searches_agree::<2>();
+        searches_agree::<5>();
+        searches_agree::<8>();
+        searches_agree::<13>();
+        // The count is the largest index whose piece starts at or below x:
+        // 6 points (the last at 1.5), so pieces 5 to 7 are the extension.
+        let s = MonotoneSpline::<f32, 8>::new(&XS[..6], &FS[..6]).unwrap();
+        assert_eq!(s.counting(-3.5), 0);
+        assert_eq!(s.counting(-3.0), 0);
+        assert_eq!(s.counting(0.5), 3);
+        assert_eq!(s.counting(1.0), 4);
+        assert_eq!(s.counting(1.5), 7);
+        assert_eq!(s.halving(1.5), 7);
     }
 
     #[test]

@@ -36,7 +36,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use bushing::ParamError;
-use firmware::{Elf, KernelLine, PeerLine};
+use firmware::{Elf, KernelLine, PeerLine, Split};
 
 use crate::cost::callgrind;
 use crate::fit::FitError;
@@ -221,9 +221,9 @@ pub struct Row {
     pub m4f_cycles: Option<f64>,
     /// Cortex-M3 estimated cycles per call, net of the call.
     pub m3_cycles: Option<f64>,
-    /// Cortex-M4F FPU arithmetic instructions per call, net of the call
-    /// ([`KernelLine::arithmetic`]).
-    pub m4f_arith: Option<f64>,
+    /// Cortex-M4F instructions per call, net of the call, by what they do
+    /// ([`KernelLine::split`]).
+    pub m4f_split: Option<Split>,
     /// The M4F input the cost is taken on (the worst of those measured),
     /// one name per part.
     pub m4f_input: Option<String>,
@@ -254,7 +254,7 @@ impl Row {
             m7: None,
             m4f_cycles: None,
             m3_cycles: None,
-            m4f_arith: None,
+            m4f_split: None,
             m4f_input: None,
             code_bytes: None,
             state_bytes: None,
@@ -421,7 +421,7 @@ pub struct Report {
 }
 
 /// Columns of the CSV.
-pub const CSV_COLUMNS: [&str; 18] = [
+pub const CSV_COLUMNS: [&str; 21] = [
     "family",
     "name",
     "n",
@@ -436,6 +436,9 @@ pub const CSV_COLUMNS: [&str; 18] = [
     "m4f_cycles",
     "m3_cycles",
     "m4f_fpu_arith",
+    "m4f_load_store",
+    "m4f_compare_branch",
+    "m4f_other",
     "worst_input",
     "code_bytes",
     "state_bytes",
@@ -536,7 +539,9 @@ fn join(
     row.m3 = sum_all(m3.iter().map(|l| l.as_ref().map(KernelLine::instructions)));
     row.m4f_cycles = sum_all(m4f.iter().map(|l| l.as_ref().and_then(|l| l.cycles)));
     row.m3_cycles = sum_all(m3.iter().map(|l| l.as_ref().and_then(|l| l.cycles)));
-    row.m4f_arith = sum_all(m4f.iter().map(|l| l.as_ref().and_then(|l| l.arithmetic)));
+    row.m4f_split = m4f.iter().try_fold(Split::default(), |acc, l| {
+        Some(acc.plus(l.as_ref()?.split?))
+    });
     let mut inputs: Vec<&str> = m4f
         .iter()
         .filter_map(|l| l.as_ref()?.input.as_deref())

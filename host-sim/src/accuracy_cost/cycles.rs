@@ -37,7 +37,7 @@
 
 use std::collections::BTreeMap;
 
-use super::firmware::{KernelLine, PeerLine};
+use super::firmware::{KernelLine, PeerLine, Split};
 
 /// The pipeline refill of a taken branch, in cycles (the middle of the
 /// TRM's 1 to 3).
@@ -259,9 +259,22 @@ struct Op {
     writes: FpRegs,
     /// FPU registers read.
     reads: FpRegs,
-    /// FPU arithmetic: add, subtract, multiply (and accumulate), divide,
-    /// square root, absolute value, negate.
-    arithmetic: bool,
+    /// What it does, for [`Split`].
+    class: Class,
+}
+
+/// What an instruction does: the four parts of a [`Split`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Class {
+    /// FPU add, subtract, multiply (and accumulate), divide, square root,
+    /// absolute value, negate.
+    Arithmetic,
+    /// A load or store (a `pop` into the PC too).
+    Transfer,
+    /// A compare or test, the move of the FPU's flags, IT, a branch.
+    Control,
+    /// Moves, integer arithmetic, conversions.
+    Other,
 }
 
 /// The condition suffixes of ARM mnemonics.
@@ -300,13 +313,14 @@ fn base(mnemonic: &str) -> Option<&'static str> {
 
 /// Every base mnemonic the tables name; anything else is a 1-cycle
 /// data-processing instruction.
-const KNOWN: [&str; 66] = [
+const KNOWN: [&str; 73] = [
     "b", "bl", "bx", "blx", "cbz", "cbnz", "tbb", "tbh", "ldr", "ldrb", "ldrh", "ldrsb", "ldrsh",
     "ldrex", "str", "strb", "strh", "strex", "ldrd", "strd", "ldm", "ldmia", "ldmdb", "stm",
     "stmia", "stmdb", "push", "pop", "mul", "mla", "mls", "umull", "smull", "umlal", "smlal",
     "umaal", "sdiv", "udiv", "vldr", "vstr", "vldm", "vldmia", "vldmdb", "vstm", "vstmia",
     "vstmdb", "vpush", "vpop", "vmla", "vmls", "vnmla", "vnmls", "vfma", "vfms", "vfnma", "vfnms",
-    "vdiv", "vsqrt", "vadd", "vsub", "vmul", "vnmul", "vcvt", "vmov", "vabs", "vneg",
+    "vdiv", "vsqrt", "vadd", "vsub", "vmul", "vnmul", "vcvt", "vmov", "vabs", "vneg", "cmp", "cmn",
+    "tst", "teq", "vcmp", "vcmpe", "vmrs",
 ];
 
 /// The FPU registers named in `text` (`s3`, `d1`, `{s0-s7}`, `{d8-d9}`).
@@ -388,7 +402,7 @@ fn decode(mnemonic: &str, operands: &str) -> Op {
         cycles: [c, c],
         writes: 0,
         reads: regs,
-        arithmetic: false,
+        class: Class::Other,
     };
     let words = list_words(operands);
     let mut op = match base {
@@ -471,11 +485,19 @@ fn decode(mnemonic: &str, operands: &str) -> Op {
     if writes_pc(base, operands) {
         op.kind = Kind::Branch;
     }
-    op.arithmetic = matches!(op.kind, Kind::FpMac)
-        || matches!(
-            base,
-            "vadd" | "vsub" | "vmul" | "vnmul" | "vdiv" | "vsqrt" | "vabs" | "vneg"
-        );
+    op.class = match base {
+        "vadd" | "vsub" | "vmul" | "vnmul" | "vdiv" | "vsqrt" | "vabs" | "vneg" => {
+            Class::Arithmetic
+        }
+        _ if op.kind == Kind::FpMac => Class::Arithmetic,
+        "ldr" | "ldrb" | "ldrh" | "ldrsb" | "ldrsh" | "ldrex" | "str" | "strb" | "strh"
+        | "strex" | "ldrd" | "strd" | "ldm" | "ldmia" | "ldmdb" | "stm" | "stmia" | "stmdb"
+        | "push" | "pop" | "vldr" | "vstr" | "vldm" | "vldmia" | "vldmdb" | "vstm" | "vstmia"
+        | "vstmdb" | "vpush" | "vpop" => Class::Transfer,
+        "cmp" | "cmn" | "tst" | "teq" | "vcmp" | "vcmpe" | "vmrs" | "it" => Class::Control,
+        _ if op.kind == Kind::Branch => Class::Control,
+        _ => Class::Other,
+    };
     // One cycle, and no result stall after them (the TRM's list leaves
     // them out), but they write their first operand.
     if matches!(base, "vabs" | "vneg") {
@@ -648,17 +670,22 @@ impl Disassembly {
         Ok(total)
     }
 
-    /// FPU arithmetic instructions executed in a window (see
-    /// [`KernelLine::arithmetic`]).
-    pub fn window_arithmetic(&self, window: &Window) -> Result<u64, Error> {
-        let mut total = 0u64;
+    /// Instructions executed in a window by what they do: arithmetic,
+    /// transfers, control, other (see [`Split`]).
+    pub fn window_split(&self, window: &Window) -> Result<[u64; 4], Error> {
+        let mut total = [0u64; 4];
         for b in &window.blocks {
-            let once = self
-                .block_ops(b)?
-                .iter()
-                .filter(|(_, op)| op.arithmetic)
-                .count();
-            total += once as u64 * b.execs;
+            for (_, op) in self.block_ops(b)? {
+                let part = match op.class {
+                    Class::Arithmetic => 0,
+                    Class::Transfer => 1,
+                    Class::Control => 2,
+                    Class::Other => 3,
+                };
+                if let Some(t) = total.get_mut(part) {
+                    *t += b.execs;
+                }
+            }
         }
         Ok(total)
     }
@@ -666,8 +693,8 @@ impl Disassembly {
 
 /// Joins a target's mix into its kernel lines: each line with windows and
 /// a call count gets estimated cycles per call ([`KernelLine::cycles`],
-/// [`KernelLine::cycles_call`]) and, on the Cortex-M4F, its FPU arithmetic
-/// instructions ([`KernelLine::arithmetic`]); its instruction counts become the
+/// [`KernelLine::cycles_call`]) and, on the Cortex-M4F, its instructions by
+/// what they do ([`KernelLine::split`]); its instruction counts become the
 /// plugin's exact ones (the SysTick figures are rounded to 40
 /// instructions over the run), all to a tenth per call.
 pub fn attach(
@@ -693,7 +720,16 @@ pub fn attach(
         line.net = Some(per_call(t.1, e.1, calls));
         line.per_call = per_call(t.1, b.1, calls);
         if core == Core::M4 {
-            line.arithmetic = Some(per_call(t.2, e.2, calls));
+            let part = |i: usize| {
+                let at = |w: &[f64; 4]| w.get(i).copied().unwrap_or(0.0);
+                difference_per_call(at(&t.2), at(&e.2), calls)
+            };
+            line.split = Some(Split {
+                arithmetic: part(0),
+                transfers: part(1),
+                control: part(2),
+                other: part(3),
+            });
         }
     }
     Ok(())
@@ -733,16 +769,23 @@ pub fn attach_peers<'l>(
 /// and around its stand-in differ by a few instructions over thousands of
 /// calls).
 fn per_call(x: f64, y: f64, calls: u64) -> f64 {
-    (((x - y) / calls as f64).max(0.0) * 10.0).round() / 10.0
+    difference_per_call(x, y, calls).max(0.0)
 }
 
-/// (estimated cycles, instructions, FPU arithmetic instructions) of a
+/// [`per_call`] without the floor at zero: the parts of a [`Split`] add up
+/// to the net instructions, so a part is negative where the stand-in runs
+/// an instruction of its kind that the kernel's code folds away.
+fn difference_per_call(x: f64, y: f64, calls: u64) -> f64 {
+    ((x - y) / calls as f64 * 10.0).round() / 10.0
+}
+
+/// (estimated cycles, instructions, instructions by what they do) of a
 /// mix's windows, each computed once.
 struct Windows<'a> {
     core: Core,
     mix: &'a Mix,
     disassembly: &'a Disassembly,
-    memo: BTreeMap<u32, (f64, f64, f64)>,
+    memo: BTreeMap<u32, (f64, f64, [f64; 4])>,
 }
 
 impl<'a> Windows<'a> {
@@ -756,9 +799,9 @@ impl<'a> Windows<'a> {
     }
 
     /// Window `w`'s totals; none: zero.
-    fn get(&mut self, w: Option<u32>) -> Result<(f64, f64, f64), Error> {
+    fn get(&mut self, w: Option<u32>) -> Result<(f64, f64, [f64; 4]), Error> {
         let Some(w) = w else {
-            return Ok((0.0, 0.0, 0.0));
+            return Ok((0.0, 0.0, [0.0; 4]));
         };
         if let Some(v) = self.memo.get(&w) {
             return Ok(*v);
@@ -767,7 +810,7 @@ impl<'a> Windows<'a> {
         let v = (
             self.disassembly.window_cycles(self.core, window)? as f64,
             window.insns as f64,
-            self.disassembly.window_arithmetic(window)? as f64,
+            self.disassembly.window_split(window)?.map(|n| n as f64),
         );
         self.memo.insert(w, v);
         Ok(v)
@@ -986,19 +1029,29 @@ mod tests {
     }
 
     #[test]
-    fn fpu_arithmetic_is_counted_per_execution_net_of_the_stand_in() {
-        // The kernel: a multiply, a multiply-accumulate, an absolute value,
-        // a compare, a conversion, a load, a move and the return, three of
-        // them arithmetic; the stand-in: a negation.
+    fn instructions_are_split_per_execution_net_of_the_stand_in() {
+        // The kernel: a multiply, a multiply-accumulate, an absolute value
+        // (arithmetic); a load, a push, a store of two words (transfers); a
+        // compare, the move of its flags, an IT, a conditional branch
+        // (control); a conversion, two moves and an integer add (other);
+        // the return. The stand-in: a negation and the return.
         let d = dis(&[
             (0x100, "vmul.f32", "s0, s1, s2"),
             (0x104, "vmla.f32", "s0, s3, s4"),
             (0x108, "vabs.f32", "s5, s0"),
-            (0x10c, "vcmp.f32", "s5, s6"),
-            (0x110, "vcvt.s32.f32", "s7, s5"),
-            (0x114, "vldr", "s8, [r0]"),
-            (0x118, "vmov", "r1, s8"),
-            (0x11c, "bx", "lr"),
+            (0x10c, "vldr", "s8, [r0]"),
+            (0x110, "push", "{r4, lr}"),
+            (0x112, "strd", "r1, r2, [sp]"),
+            (0x116, "vcmp.f32", "s5, s6"),
+            (0x11a, "vmrs", "APSR_nzcv, fpscr"),
+            (0x11e, "it", "gt"),
+            (0x120, "movgt", "r0, #1"),
+            (0x122, "cmp", "r0, #2"),
+            (0x124, "bne", "0x100"),
+            (0x126, "vcvt.s32.f32", "s7, s5"),
+            (0x12a, "vmov", "r1, s8"),
+            (0x12e, "adds", "r1, #4"),
+            (0x130, "bx", "lr"),
             (0x200, "vneg.f32", "s0, s0"),
             (0x204, "bx", "lr"),
         ]);
@@ -1013,21 +1066,33 @@ mod tests {
             }],
         };
         let mix = Mix {
-            windows: vec![run(0x100, 0x120, 8), run(0x200, 0x206, 2)],
+            windows: vec![run(0x100, 0x132, 16), run(0x200, 0x206, 2)],
             source_name: "m".into(),
         };
-        assert_eq!(d.window_arithmetic(&mix.windows[0]), Ok(12));
-        assert_eq!(d.window_arithmetic(&mix.windows[1]), Ok(4));
+        assert_eq!(d.window_split(&mix.windows[0]), Ok([12, 12, 24, 16]));
+        assert_eq!(d.window_split(&mix.windows[1]), Ok([4, 0, 4, 0]));
         let text = "kernel target=m4f type=f32 family=f name=k n=1 per_call=9 calls=4 \
                     windows=0,1,-1";
         let mut m4f = parse_kernels("t", text).unwrap_or_default();
         assert!(attach(&mut m4f, "m4f", &mix, &d).is_ok());
-        // (12 - 4) / 4 calls.
-        assert_eq!(m4f.first().and_then(|l| l.arithmetic), Some(2.0));
-        // The Cortex-M3 has no FPU: no count.
+        // Per call, less the stand-in's: (12 - 4) / 4, 12 / 4, (24 - 4) / 4,
+        // 16 / 4; together the net instructions, (64 - 8) / 4.
+        let split = Split {
+            arithmetic: 2.0,
+            transfers: 3.0,
+            control: 5.0,
+            other: 4.0,
+        };
+        assert_eq!(m4f.first().and_then(|l| l.split), Some(split));
+        assert_eq!(m4f.first().and_then(|l| l.net), Some(14.0));
+        // A part below the stand-in's stays negative, so that the parts
+        // still add up; the instruction count does not go below zero.
+        assert_eq!(difference_per_call(4.0, 8.0, 4), -1.0);
+        assert_eq!(per_call(4.0, 8.0, 4), 0.0);
+        // Counted on the Cortex-M4F only.
         let mut m3 = parse_kernels("t", &text.replace("m4f", "m3")).unwrap_or_default();
         assert!(attach(&mut m3, "m3", &mix, &d).is_ok());
-        assert_eq!(m3.first().map(|l| l.arithmetic), Some(None));
+        assert_eq!(m3.first().map(|l| l.split), Some(None));
     }
 
     #[test]

@@ -135,16 +135,44 @@ pub struct KernelLine {
     pub cycles: Option<f64>,
     /// Estimated cycles per call, call included.
     pub cycles_call: Option<f64>,
-    /// FPU arithmetic instructions per call, net of the call (add,
-    /// subtract, multiply and its accumulating forms, divide, square root,
-    /// absolute value, negate), from the Cortex-M4F mix: the part of
-    /// [`KernelLine::net`] that computes rather than moves, tests or
-    /// branches.
-    pub arithmetic: Option<f64>,
+    /// The instructions per call, net of the call, by what they do, from
+    /// the Cortex-M4F mix.
+    pub split: Option<Split>,
     /// Every key of the line, as printed.
     pub fields: BTreeMap<String, String>,
     /// `file:line`, for messages.
     pub origin: String,
+}
+
+/// A kernel's Cortex-M4F instructions per call, net of the call, by what
+/// they do: what computes, what moves data between registers and memory,
+/// and what decides. Arithmetic and transfers together are a floor the
+/// kernel's code cannot go below without computing less or keeping more
+/// in registers.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Split {
+    /// FPU arithmetic: add, subtract, multiply and its accumulating forms,
+    /// divide, square root, absolute value, negate.
+    pub arithmetic: f64,
+    /// Loads and stores, of one register or several (pushes and pops too).
+    pub transfers: f64,
+    /// Compares and tests (the FPU's with the move of its flags), IT and
+    /// branches (calls and returns too).
+    pub control: f64,
+    /// The rest: register moves, integer arithmetic, conversions.
+    pub other: f64,
+}
+
+impl Split {
+    /// The entry-wise sum.
+    pub fn plus(self, o: Self) -> Self {
+        Self {
+            arithmetic: self.arithmetic + o.arithmetic,
+            transfers: self.transfers + o.transfers,
+            control: self.control + o.control,
+            other: self.other + o.other,
+        }
+    }
 }
 
 /// A kernel's cost on one input.
@@ -345,7 +373,7 @@ fn kernel_line(rest: &str, origin: String) -> Result<KernelLine, LineProblem> {
         windows: windows(&f)?,
         cycles: None,
         cycles_call: None,
-        arithmetic: None,
+        split: None,
         fields: f,
         origin,
     })

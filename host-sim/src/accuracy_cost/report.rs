@@ -83,14 +83,20 @@ fn m4f<'a>(lines: &'a mut Lines, family: &str, name: &str, n: usize) -> Option<&
     lines.get("m4f", &Key::new(family, name, n, "f32"))
 }
 
-/// The estimated cycles, the FPU arithmetic instructions and the worst
+/// The estimated cycles, the instructions by what they do and the worst
 /// input of a target's line, for its note.
 fn cycles_note(l: &KernelLine) -> String {
     let mut cycles = l
         .cycles
         .map_or_else(String::new, |c| format!("; estimated {} cycles", sig(c)));
-    if let Some(a) = l.arithmetic {
-        cycles += &format!("; {} FPU arithmetic instructions", sig(a));
+    if let Some(s) = l.split {
+        cycles += &format!(
+            "; {} FPU arithmetic, {} load or store, {} compare or branch and {} other instructions",
+            sig(s.arithmetic),
+            sig(s.transfers),
+            sig(s.control),
+            sig(s.other)
+        );
     }
     match &l.input {
         Some(input) if l.by_input.len() > 1 => format!("{cycles}; worst input {input}"),
@@ -638,11 +644,16 @@ pub(super) fn markdown(
            pipeline refill of {refill} cycles per taken branch; zero-wait-state memory assumed (the model\n  \
            and its assumptions: `bushing_sim::accuracy_cost::cycles`). Pareto fronts and the\n  \
            cheapest-configuration tables rank by M4F cycles where the report has them. The\n  \
-           bounds also give each kernel's FPU arithmetic instructions (add, subtract, multiply and\n  \
-           its accumulating forms, divide, square root, absolute value, negate), net of the call:\n  \
-           the part of its M4F instructions that computes rather than loads, stores, tests or\n  \
-           branches (the CSV's `m4f_fpu_arith` for every kernel; 0 for `f64` and fixed point,\n  \
-           which the Cortex-M4F's single-precision FPU does not compute).\n\
+           bounds also split each kernel's M4F instructions, net of the call, by what they do: FPU\n  \
+           arithmetic (add, subtract, multiply and its accumulating forms, divide, square root,\n  \
+           absolute value, negate; 0 for `f64` and fixed point, which the single-precision FPU\n  \
+           does not compute), loads and stores (one register or several, pushes and pops), compares\n  \
+           and branches (with IT and the move of the FPU's flags), and the other instructions\n  \
+           (moves, integer arithmetic, conversions); the CSV has the four for every kernel\n  \
+           (`m4f_fpu_arith`, `m4f_load_store`, `m4f_compare_branch`, `m4f_other`). Each is net of\n  \
+           the stand-in, so the four add up to the net instructions (a part is negative where the\n  \
+           stand-in runs an instruction of its kind that the kernel's code folds away). Arithmetic\n  \
+           and transfers together are a floor for the kernel's code as it computes and stores today.\n\
          - **host ns**: ns per call on this machine, median of {} runs of {} calls (a timing loop,\n  \
            not a benchmark harness: `cargo bench -p bushing-sim --bench kernels` runs divan), on\n  \
            the large sine; the host bound times the default bushing on each of the three inputs.\n\
@@ -1007,7 +1018,10 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             csv_num(r.m7),
             csv_num(r.m4f_cycles),
             csv_num(r.m3_cycles),
-            csv_num(r.m4f_arith),
+            csv_num(r.m4f_split.map(|s| s.arithmetic)),
+            csv_num(r.m4f_split.map(|s| s.transfers)),
+            csv_num(r.m4f_split.map(|s| s.control)),
+            csv_num(r.m4f_split.map(|s| s.other)),
             r.m4f_input.clone().unwrap_or_default(),
             csv_bytes(r.code_bytes),
             csv_bytes(r.state_bytes),
@@ -1038,7 +1052,10 @@ pub(super) fn csv(rows: &[Row], other: &[KernelLine], elfs: &BTreeMap<String, El
             csv_num(c.map(KernelLine::instructions)),
             csv_num(a.and_then(|l| l.cycles)),
             csv_num(b.and_then(|l| l.cycles)),
-            csv_num(a.and_then(|l| l.arithmetic)),
+            csv_num(a.and_then(|l| l.split).map(|s| s.arithmetic)),
+            csv_num(a.and_then(|l| l.split).map(|s| s.transfers)),
+            csv_num(a.and_then(|l| l.split).map(|s| s.control)),
+            csv_num(a.and_then(|l| l.split).map(|s| s.other)),
             a.and_then(|l| l.input.clone()).unwrap_or_default(),
             csv_bytes(code),
             csv_bytes(any.and_then(|l| l.state_bytes)),
